@@ -1,0 +1,89 @@
+#include "engine/cell_bins.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+namespace mpm {
+
+namespace {
+// Fixed chunking (independent of the thread count) keeps the sort deterministic.
+constexpr std::size_t chunk_size = 1 << 16;
+}  // namespace
+
+template <int Dim>
+CellBins<Dim>::CellBins(std::array<int, Dim> cells, std::array<double, Dim> length, int block_width)
+    : cells_(cells), block_width_(block_width) {
+  if (block_width < 1) throw std::invalid_argument("CellBins: block width must be ≥ 1");
+  std::size_t total = 1;
+  for (int d = 0; d < Dim; ++d) {
+    inv_h_[d] = cells[d] / length[d];
+    nblocks_[d] = (cells[d] + block_width - 1) / block_width;
+    total *= nblocks_[d];
+  }
+  // colour of block (b0, b1) = (b0 mod 2) + 2 (b1 mod 2); rank blocks colour-major, row-major within a colour
+  rank_.resize(total);
+  std::array<std::size_t, (1 << Dim)> per_colour{};
+  auto colour_of = [&](std::size_t idx) {
+    int c = 0;
+    for (int d = 0; d < Dim; ++d) {
+      c |= static_cast<int>(idx % nblocks_[d] & 1) << d;
+      idx /= nblocks_[d];
+    }
+    return c;
+  };
+  for (std::size_t b = 0; b < total; ++b) ++per_colour[colour_of(b)];
+  colour_begin_[0] = 0;
+  for (int c = 0; c < (1 << Dim); ++c) colour_begin_[c + 1] = colour_begin_[c] + per_colour[c];
+  auto next = colour_begin_;
+  for (std::size_t b = 0; b < total; ++b) rank_[b] = static_cast<unsigned>(next[colour_of(b)]++);
+  block_begin_.assign(total + 1, 0);
+}
+
+template <int Dim>
+void CellBins<Dim>::bin(const std::array<const double*, Dim>& x, std::size_t count) {
+  const std::size_t nb = blocks();
+  const std::size_t chunks = std::max<std::size_t>(1, (count + chunk_size - 1) / chunk_size);
+  key_.resize(count);
+  order_.resize(count);
+  counts_.assign(chunks * nb, 0);
+
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+    std::size_t* cnt = counts_.data() + c * nb;
+    const std::size_t end = std::min(count, (c + 1) * chunk_size);
+    for (std::size_t p = c * chunk_size; p < end; ++p) {
+      std::size_t block = 0, stride = 1;
+      for (int d = 0; d < Dim; ++d) {
+        const int cell = std::clamp(static_cast<int>(std::floor(x[d][p] * inv_h_[d])), 0, cells_[d] - 1);
+        block += stride * (cell / block_width_);
+        stride *= nblocks_[d];
+      }
+      const unsigned k = rank_[block];
+      key_[p] = k;
+      ++cnt[k];
+    }
+  });
+
+  // exclusive prefix over (rank, chunk): particles of one block keep their chunk order, hence stability
+  std::size_t running = 0;
+  for (std::size_t k = 0; k < nb; ++k) {
+    block_begin_[k] = running;
+    for (std::size_t c = 0; c < chunks; ++c) {
+      const std::size_t n = counts_[c * nb + k];
+      counts_[c * nb + k] = running;
+      running += n;
+    }
+  }
+  block_begin_[nb] = running;
+
+  tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
+    std::size_t* off = counts_.data() + c * nb;
+    const std::size_t end = std::min(count, (c + 1) * chunk_size);
+    for (std::size_t p = c * chunk_size; p < end; ++p) order_[off[key_[p]]++] = static_cast<unsigned>(p);
+  });
+}
+
+template class CellBins<1>;
+template class CellBins<2>;
+
+}  // namespace mpm

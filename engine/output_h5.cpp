@@ -1,0 +1,727 @@
+// HDF5 run file and XDMF sidecar (see output_h5.hpp for the layout). HDF5 C API only.
+#include "engine/output_h5.hpp"
+
+#include <hdf5.h>
+
+#include <algorithm>
+#include <charconv>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <set>
+#include <sstream>
+
+namespace mpm {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr hsize_t kMaxChunk = hsize_t{1} << 16;  // elements per chunk of a particle column (512 KiB of doubles)
+constexpr hsize_t kMetricsChunkValues = 4096;    // values per chunk of /metrics (32 KiB), also the write batch
+constexpr const char* kCheckpointTmp = "/checkpoint.new";
+
+// HDF5 prints its error stack to stderr by default; we silence that and build our own messages. The setting is
+// per thread in thread-safe builds, so every entry point repeats it (it is cheap).
+void quiet() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
+
+// The most specific entry of HDF5's error stack (e.g. "unable to open file: ... No such file or directory").
+std::string hdf5_detail() {
+  std::string detail;
+  auto innermost = [](unsigned n, const H5E_error2_t* e, void* data) -> herr_t {
+    if (n == 0 && e->desc) *static_cast<std::string*>(data) = e->desc;
+    return 0;
+  };
+  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, innermost, &detail);
+  H5Eclear2(H5E_DEFAULT);
+  return detail;
+}
+
+[[noreturn]] void fail(const std::string& file, const std::string& what) {
+  const std::string detail = hdf5_detail();
+  throw OutputError("HDF5 file '" + file + "': " + what + " failed" + (detail.empty() ? "" : ": " + detail));
+}
+
+void check(herr_t status, const std::string& file, const std::string& what) {
+  if (status < 0) fail(file, what);
+}
+
+/// Owns one HDF5 id and closes it with the matching H5?close, so early throws leak nothing.
+class Handle {
+ public:
+  using Closer = herr_t (*)(hid_t);
+  Handle() = default;
+  Handle(hid_t id, Closer closer) : id_(id), closer_(closer) {}
+  Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, -1)), closer_(o.closer_) {}
+  Handle& operator=(Handle&& o) noexcept {
+    if (this != &o) {
+      reset();
+      id_ = std::exchange(o.id_, -1);
+      closer_ = o.closer_;
+    }
+    return *this;
+  }
+  ~Handle() { reset(); }
+  hid_t get() const { return id_; }
+  bool valid() const { return id_ >= 0; }
+  hid_t release() { return std::exchange(id_, -1); }
+  void reset() {
+    if (id_ >= 0) closer_(id_);
+    id_ = -1;
+  }
+
+ private:
+  hid_t id_ = -1;
+  Closer closer_ = nullptr;
+};
+
+Handle own(hid_t id, Handle::Closer closer, const std::string& file, const std::string& what) {
+  if (id < 0) fail(file, what);
+  return Handle(id, closer);
+}
+
+bool exists(hid_t loc, const std::string& name, const std::string& file) {
+  const htri_t e = H5Lexists(loc, name.c_str(), H5P_DEFAULT);
+  if (e < 0) fail(file, "H5Lexists('" + name + "')");
+  return e > 0;
+}
+
+void remove_link(hid_t loc, const std::string& name, const std::string& file) {
+  if (exists(loc, name, file)) check(H5Ldelete(loc, name.c_str(), H5P_DEFAULT), file, "H5Ldelete('" + name + "')");
+}
+
+Handle create_group(hid_t loc, const std::string& name, const std::string& file) {
+  return own(H5Gcreate2(loc, name.c_str(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, file,
+             "H5Gcreate2('" + name + "')");
+}
+
+// ---- attributes ---------------------------------------------------------------------------------------------
+
+Handle string_type(H5T_cset_t cset, const std::string& file) {
+  Handle t = own(H5Tcopy(H5T_C_S1), H5Tclose, file, "H5Tcopy");
+  check(H5Tset_size(t.get(), H5T_VARIABLE), file, "H5Tset_size");
+  check(H5Tset_cset(t.get(), cset), file, "H5Tset_cset");
+  return t;
+}
+
+// Attributes are replaced rather than updated, since a new value may have another type or shape.
+void drop_attribute(hid_t obj, const std::string& name, const std::string& file) {
+  const htri_t e = H5Aexists(obj, name.c_str());
+  if (e < 0) fail(file, "H5Aexists('" + name + "')");
+  if (e > 0) check(H5Adelete(obj, name.c_str()), file, "H5Adelete('" + name + "')");
+}
+
+// Variable-length UTF-8 strings: no size limit (the scene can be long) and h5py reads them as str.
+void write_strings(hid_t obj, const std::string& name, const std::vector<std::string>& values, bool scalar,
+                   const std::string& file) {
+  drop_attribute(obj, name, file);
+  Handle type = string_type(H5T_CSET_UTF8, file);
+  const hsize_t n = values.size();
+  Handle space = own(scalar ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr), H5Sclose, file, "H5Screate");
+  Handle attr = own(H5Acreate2(obj, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                    file, "H5Acreate2('" + name + "')");
+  std::vector<const char*> ptrs;
+  for (const auto& v : values) ptrs.push_back(v.c_str());
+  check(H5Awrite(attr.get(), type.get(), ptrs.data()), file, "H5Awrite('" + name + "')");
+}
+
+void write_number(hid_t obj, const std::string& name, hid_t file_type, hid_t mem_type, const void* value,
+                  const std::string& file) {
+  drop_attribute(obj, name, file);
+  Handle space = own(H5Screate(H5S_SCALAR), H5Sclose, file, "H5Screate");
+  Handle attr = own(H5Acreate2(obj, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose,
+                    file, "H5Acreate2('" + name + "')");
+  check(H5Awrite(attr.get(), mem_type, value), file, "H5Awrite('" + name + "')");
+}
+void write_double(hid_t obj, const std::string& name, double v, const std::string& file) {
+  write_number(obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, &v, file);
+}
+void write_int(hid_t obj, const std::string& name, long long v, const std::string& file) {
+  write_number(obj, name, H5T_STD_I64LE, H5T_NATIVE_LLONG, &v, file);
+}
+
+double read_number(hid_t obj, const std::string& name, const std::string& file) {
+  Handle attr = own(H5Aopen(obj, name.c_str(), H5P_DEFAULT), H5Aclose, file, "H5Aopen('" + name + "')");
+  Handle space = own(H5Aget_space(attr.get()), H5Sclose, file, "H5Aget_space");
+  if (H5Sget_simple_extent_npoints(space.get()) != 1)
+    throw OutputError("HDF5 file '" + file + "': attribute '" + name + "' is not a single number");
+  double v = 0;
+  check(H5Aread(attr.get(), H5T_NATIVE_DOUBLE, &v), file, "H5Aread('" + name + "') as a number");
+  return v;
+}
+
+// Reads variable-length strings (ours) and fixed-length ones (other writers, e.g. numpy bytes via h5py).
+std::vector<std::string> read_strings(hid_t obj, const std::string& name, const std::string& file) {
+  Handle attr = own(H5Aopen(obj, name.c_str(), H5P_DEFAULT), H5Aclose, file, "H5Aopen('" + name + "')");
+  Handle type = own(H5Aget_type(attr.get()), H5Tclose, file, "H5Aget_type");
+  if (H5Tget_class(type.get()) != H5T_STRING)
+    throw OutputError("HDF5 file '" + file + "': attribute '" + name + "' is not a string");
+  Handle space = own(H5Aget_space(attr.get()), H5Sclose, file, "H5Aget_space");
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (n < 0) fail(file, "H5Sget_simple_extent_npoints");
+  std::vector<std::string> out;
+  if (n == 0) return out;
+  const H5T_cset_t cset = H5Tget_cset(type.get());
+  if (H5Tis_variable_str(type.get()) > 0) {
+    Handle mem = string_type(cset, file);
+    std::vector<char*> ptrs(static_cast<std::size_t>(n), nullptr);
+    check(H5Aread(attr.get(), mem.get(), ptrs.data()), file, "H5Aread('" + name + "')");
+    for (char* p : ptrs) {
+      out.emplace_back(p ? p : "");
+      H5free_memory(p);
+    }
+  } else {
+    const std::size_t size = H5Tget_size(type.get());
+    Handle mem = own(H5Tcopy(H5T_C_S1), H5Tclose, file, "H5Tcopy");
+    check(H5Tset_size(mem.get(), size), file, "H5Tset_size");
+    check(H5Tset_cset(mem.get(), cset), file, "H5Tset_cset");
+    check(H5Tset_strpad(mem.get(), H5Tget_strpad(type.get())), file, "H5Tset_strpad");
+    std::vector<char> buf(size * static_cast<std::size_t>(n));
+    check(H5Aread(attr.get(), mem.get(), buf.data()), file, "H5Aread('" + name + "')");
+    for (hssize_t i = 0; i < n; ++i) {
+      const char* p = buf.data() + i * size;
+      out.emplace_back(p, std::find(p, p + size, '\0'));
+    }
+  }
+  return out;
+}
+
+// ---- datasets and groups ------------------------------------------------------------------------------------
+
+// Columns compress well with shuffle + deflate(1) (exponent bytes are alike), at little CPU cost. A zero-size
+// dataset cannot be chunked (a chunk dimension must be >= 1 and <= a fixed size), so empty columns stay contiguous.
+void write_column(hid_t group, const ColumnView& c, const std::string& file) {
+  const hsize_t n = c.values.size();
+  Handle space = own(H5Screate_simple(1, &n, nullptr), H5Sclose, file, "H5Screate_simple");
+  Handle dcpl = own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, file, "H5Pcreate");
+  if (n > 0) {
+    const hsize_t chunk = std::min(n, kMaxChunk);
+    check(H5Pset_chunk(dcpl.get(), 1, &chunk), file, "H5Pset_chunk");
+    check(H5Pset_shuffle(dcpl.get()), file, "H5Pset_shuffle");
+    check(H5Pset_deflate(dcpl.get(), 1), file, "H5Pset_deflate");
+  }
+  Handle ds = own(H5Dcreate2(group, c.name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                  H5Dclose, file, "H5Dcreate2('" + c.name + "')");
+  if (n > 0)
+    check(H5Dwrite(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, c.values.data()), file,
+          "H5Dwrite('" + c.name + "')");
+}
+
+std::vector<double> read_all(hid_t ds, const std::string& file, const std::string& name) {
+  Handle space = own(H5Dget_space(ds), H5Sclose, file, "H5Dget_space('" + name + "')");
+  const hssize_t n = H5Sget_simple_extent_npoints(space.get());
+  if (n < 0) fail(file, "H5Sget_simple_extent_npoints('" + name + "')");
+  std::vector<double> v(static_cast<std::size_t>(n));
+  if (n > 0)
+    check(H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v.data()), file, "H5Dread('" + name + "')");
+  return v;
+}
+
+hsize_t extent0(hid_t ds, const std::string& file) {
+  Handle space = own(H5Dget_space(ds), H5Sclose, file, "H5Dget_space");
+  hsize_t dims[2] = {0, 0};
+  if (H5Sget_simple_extent_dims(space.get(), dims, nullptr) < 0) fail(file, "H5Sget_simple_extent_dims");
+  return dims[0];
+}
+
+// Link names of a group in name order. (H5Literate's callback type differs between HDF5 1.10 and 1.12; indexing
+// by position works with both.)
+std::vector<std::string> link_names(hid_t group, const std::string& file) {
+  H5G_info_t info;
+  check(H5Gget_info(group, &info), file, "H5Gget_info");
+  std::vector<std::string> names;
+  for (hsize_t i = 0; i < info.nlinks; ++i) {
+    const ssize_t len = H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, nullptr, 0, H5P_DEFAULT);
+    if (len < 0) fail(file, "H5Lget_name_by_idx");
+    std::string name(static_cast<std::size_t>(len), '\0');
+    if (H5Lget_name_by_idx(group, ".", H5_INDEX_NAME, H5_ITER_INC, i, name.data(), name.size() + 1, H5P_DEFAULT) < 0)
+      fail(file, "H5Lget_name_by_idx");
+    names.push_back(std::move(name));
+  }
+  return names;
+}
+
+std::vector<std::string> dataset_names(hid_t group, const std::string& file) {
+  std::vector<std::string> out;
+  for (auto& name : link_names(group, file)) {
+    Handle obj = own(H5Oopen(group, name.c_str(), H5P_DEFAULT), H5Oclose, file, "H5Oopen('" + name + "')");
+    if (H5Iget_type(obj.get()) == H5I_DATASET) out.push_back(std::move(name));
+  }
+  return out;
+}
+
+// Snapshot group names are the zero-padded step; steps past 999999 get more digits, so order by length first.
+void sort_steps(std::vector<std::string>& names) {
+  std::sort(names.begin(), names.end(), [](const std::string& a, const std::string& b) {
+    return a.size() != b.size() ? a.size() < b.size() : a < b;
+  });
+}
+
+std::string snapshot_name(long step) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%06ld", step);
+  return buf;
+}
+
+void check_names(std::span<const ColumnView> columns, const std::string& file, const char* op) {
+  std::set<std::string> seen;
+  for (const auto& c : columns) {
+    if (c.name.empty() || c.name == "." || c.name.find('/') != std::string::npos)
+      throw OutputError("'" + file + "': " + op + ": invalid column name '" + c.name + "'");
+    if (!seen.insert(c.name).second)
+      throw OutputError("'" + file + "': " + op + ": column '" + c.name + "' given twice");
+  }
+}
+
+// ---- XDMF -------------------------------------------------------------------------------------------------------
+
+std::string xml_escape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '&': out += "&amp;"; break;
+      case '<': out += "&lt;"; break;
+      case '>': out += "&gt;"; break;
+      case '"': out += "&quot;"; break;
+      case '\'': out += "&apos;"; break;
+      default: out += c;
+    }
+  }
+  return out;
+}
+
+std::string shortest(double v) {  // round-trips exactly, without 17-digit noise
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+// A DataItem for the first n values of an HDF5 dataset of `total` values: a plain reference when n == total,
+// else a HyperSlab (start 0, stride 1, count n) over it.
+std::string data_item(const std::string& ref, hsize_t n, hsize_t total, bool integer, const std::string& indent) {
+  const std::string type = integer ? "NumberType=\"Int\"" : "NumberType=\"Float\"";
+  const std::string hdf = "<DataItem Dimensions=\"" + std::to_string(total) + "\" " + type +
+                          " Precision=\"8\" Format=\"HDF\">" + xml_escape(ref) + "</DataItem>\n";
+  if (n == total) return indent + hdf;
+  return indent + "<DataItem ItemType=\"HyperSlab\" Dimensions=\"" + std::to_string(n) + "\" Type=\"HyperSlab\">\n" +
+         indent + "  <DataItem Dimensions=\"3 1\" Format=\"XML\">0 1 " + std::to_string(n) + "</DataItem>\n" +
+         indent + "  " + hdf + indent + "</DataItem>\n";
+}
+
+void write_text_atomically(const std::string& path, const std::string& text) {
+  const std::string tmp = path + ".partial";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << text;
+    out.close();
+    if (!out) throw OutputError("cannot write '" + tmp + "'");
+  }
+  std::error_code ec;
+  fs::rename(tmp, path, ec);
+  if (ec) throw OutputError("cannot rename '" + tmp + "' to '" + path + "': " + ec.message());
+}
+
+Handle open_read(const std::string& path) {
+  quiet();
+  return own(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose, path, "H5Fopen (read)");
+}
+
+Handle file_access(const std::string& file) {
+  // STRONG: H5Fclose really closes the file (and flushes it) before we rename it.
+  Handle fapl = own(H5Pcreate(H5P_FILE_ACCESS), H5Pclose, file, "H5Pcreate");
+  check(H5Pset_fclose_degree(fapl.get(), H5F_CLOSE_STRONG), file, "H5Pset_fclose_degree");
+  return fapl;
+}
+
+}  // namespace
+
+// ---- H5Writer -----------------------------------------------------------------------------------------------------
+
+struct H5Writer::State {
+  std::string path, partial;
+  int dimension = 0;
+  Handle file, metrics;
+  std::vector<std::string> metric_names;
+  std::vector<double> pending;  // metrics rows not yet in the file, row-major
+  hsize_t rows_in_file = 0;
+  hsize_t chunk_rows = 1;
+  bool closed = false;
+
+  void open_metrics() {
+    metrics = own(H5Dopen2(file.get(), "/metrics", H5P_DEFAULT), H5Dclose, partial, "H5Dopen2('/metrics')");
+    metric_names = read_strings(metrics.get(), "columns", partial);
+    rows_in_file = extent0(metrics.get(), partial);
+    chunk_rows = std::max<hsize_t>(1, kMetricsChunkValues / std::max<std::size_t>(1, metric_names.size()));
+  }
+
+  void flush_metrics() {
+    if (pending.empty()) return;
+    const hsize_t ncols = metric_names.size(), rows = pending.size() / ncols;
+    const hsize_t dims[2] = {rows_in_file + rows, ncols}, start[2] = {rows_in_file, 0}, count[2] = {rows, ncols};
+    check(H5Dset_extent(metrics.get(), dims), partial, "H5Dset_extent('/metrics')");
+    Handle fspace = own(H5Dget_space(metrics.get()), H5Sclose, partial, "H5Dget_space('/metrics')");
+    check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, start, nullptr, count, nullptr), partial,
+          "H5Sselect_hyperslab('/metrics')");
+    Handle mspace = own(H5Screate_simple(2, count, nullptr), H5Sclose, partial, "H5Screate_simple");
+    check(H5Dwrite(metrics.get(), H5T_NATIVE_DOUBLE, mspace.get(), fspace.get(), H5P_DEFAULT, pending.data()),
+          partial, "H5Dwrite('/metrics')");
+    rows_in_file += rows;
+    pending.clear();
+  }
+
+  // Grows /xdmf/<name> to at least n values; returns the old size. Extendible, with a chunk independent of the
+  // size, because particle counts may grow between snapshots.
+  hsize_t grow_helper(hid_t group, const char* name, hid_t type, hsize_t n, Handle& ds) {
+    if (exists(group, name, partial)) {
+      ds = own(H5Dopen2(group, name, H5P_DEFAULT), H5Dclose, partial, std::string("H5Dopen2('/xdmf/") + name + "')");
+      const hsize_t old = extent0(ds.get(), partial);
+      if (old < n) check(H5Dset_extent(ds.get(), &n), partial, "H5Dset_extent");
+      return old;
+    }
+    const hsize_t maxdim = H5S_UNLIMITED, chunk = kMaxChunk;
+    Handle space = own(H5Screate_simple(1, &n, &maxdim), H5Sclose, partial, "H5Screate_simple");
+    Handle dcpl = own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, partial, "H5Pcreate");
+    check(H5Pset_chunk(dcpl.get(), 1, &chunk), partial, "H5Pset_chunk");
+    check(H5Pset_shuffle(dcpl.get()), partial, "H5Pset_shuffle");
+    check(H5Pset_deflate(dcpl.get(), 1), partial, "H5Pset_deflate");
+    const long long zero = 0;  // explicit fill value: unwritten chunks read as 0 and take no space
+    check(H5Pset_fill_value(dcpl.get(), H5T_NATIVE_LLONG, &zero), partial, "H5Pset_fill_value");
+    ds = own(H5Dcreate2(group, name, type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT), H5Dclose, partial,
+             std::string("H5Dcreate2('/xdmf/") + name + "')");
+    return 0;
+  }
+
+  // Polyvertex cells need connectivity (ParaView counts cells from it), and a 1D run needs a second coordinate;
+  // both are shared by all snapshots and written once: /xdmf/ids = 0..n-1 and /xdmf/zeros (never written, so it
+  // is all fill value and costs nothing).
+  std::pair<hsize_t, hsize_t> write_xdmf_helpers(hsize_t n) {
+    Handle group = exists(file.get(), "/xdmf", partial) ? own(H5Gopen2(file.get(), "/xdmf", H5P_DEFAULT), H5Gclose,
+                                                              partial, "H5Gopen2('/xdmf')")
+                                                        : create_group(file.get(), "/xdmf", partial);
+    Handle ids, zeros;
+    const hsize_t zeros_size = std::max(n, grow_helper(group.get(), "zeros", H5T_IEEE_F64LE, n, zeros));
+    const hsize_t ids_old = grow_helper(group.get(), "ids", H5T_STD_I64LE, n, ids);
+    std::vector<long long> block;
+    for (hsize_t start = ids_old; start < n; start += kMaxChunk) {
+      const hsize_t count = std::min(kMaxChunk, n - start);
+      block.resize(count);
+      for (hsize_t i = 0; i < count; ++i) block[i] = static_cast<long long>(start + i);
+      Handle fspace = own(H5Dget_space(ids.get()), H5Sclose, partial, "H5Dget_space");
+      check(H5Sselect_hyperslab(fspace.get(), H5S_SELECT_SET, &start, nullptr, &count, nullptr), partial,
+            "H5Sselect_hyperslab");
+      Handle mspace = own(H5Screate_simple(1, &count, nullptr), H5Sclose, partial, "H5Screate_simple");
+      check(H5Dwrite(ids.get(), H5T_NATIVE_LLONG, mspace.get(), fspace.get(), H5P_DEFAULT, block.data()), partial,
+            "H5Dwrite('/xdmf/ids')");
+    }
+    return {std::max(n, ids_old), zeros_size};  // their sizes (a continued run may have had more particles)
+  }
+
+  // The sidecar is built from what the file holds (not from what this writer wrote), so it also covers
+  // snapshots of an earlier run continued with append().
+  std::string build_xdmf() {
+    struct Grid {
+      std::string name;
+      double time = 0;
+      hsize_t n = 0;
+      std::vector<std::string> columns;
+    };
+    std::vector<Grid> grids;
+    hsize_t max_n = 0;
+    Handle snaps = own(H5Gopen2(file.get(), "/snapshots", H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('/snapshots')");
+    auto names = link_names(snaps.get(), partial);
+    sort_steps(names);
+    for (auto& name : names) {
+      Handle g = own(H5Gopen2(snaps.get(), name.c_str(), H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('" + name + "')");
+      Grid grid{name, read_number(g.get(), "time", partial), 0, dataset_names(g.get(), partial)};
+      if (!grid.columns.empty()) {
+        Handle ds = own(H5Dopen2(g.get(), grid.columns.front().c_str(), H5P_DEFAULT), H5Dclose, partial, "H5Dopen2");
+        grid.n = extent0(ds.get(), partial);
+      }
+      max_n = std::max(max_n, grid.n);
+      grids.push_back(std::move(grid));
+    }
+    const auto [ids_size, zeros_size] = max_n > 0 ? write_xdmf_helpers(max_n) : std::pair<hsize_t, hsize_t>{0, 0};
+
+    // Relative reference by the final name, so the pair of files can be moved together.
+    const std::string h5 = fs::path(path).filename().string() + ":";
+    const int ncoord = dimension == 3 ? 3 : 2;  // ParaView needs at least X_Y
+    std::ostringstream x;
+    x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
+      << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+    for (const auto& g : grids) {
+      if (g.n == 0) {  // Xdmf3 (ParaView's reader) fails on empty grids, so an empty snapshot is only noted
+        x << "      <!-- snapshot " << g.name << " at t = " << shortest(g.time) << " has no particles -->\n";
+        continue;
+      }
+      const std::string base = h5 + "/snapshots/" + g.name + "/", in = "          ";
+      x << "      <Grid Name=\"" << g.name << "\" GridType=\"Uniform\">\n"
+        << "        <Time Value=\"" << shortest(g.time) << "\"/>\n";
+      x << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << g.n << "\" NodesPerElement=\"1\">\n"
+        << data_item(h5 + "/xdmf/ids", g.n, ids_size, true, in) << "        </Topology>\n"
+        << "        <Geometry GeometryType=\"" << (ncoord == 3 ? "X_Y_Z" : "X_Y") << "\">\n";
+      std::set<std::string> coords;
+      for (int i = 0; i < ncoord; ++i) {
+        const std::string c = "x" + std::to_string(i);
+        const bool have = std::find(g.columns.begin(), g.columns.end(), c) != g.columns.end();
+        x << (have ? data_item(base + c, g.n, g.n, false, in)
+                   : data_item(h5 + "/xdmf/zeros", g.n, zeros_size, false, in));
+        coords.insert(c);
+      }
+      x << "        </Geometry>\n";
+      for (const auto& c : g.columns) {
+        if (coords.count(c)) continue;
+        x << "        <Attribute Name=\"" << xml_escape(c) << "\" AttributeType=\"Scalar\" Center=\"Node\">\n"
+          << data_item(base + c, g.n, g.n, false, in) << "        </Attribute>\n";
+      }
+      x << "      </Grid>\n";
+    }
+    x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
+    return x.str();
+  }
+};
+
+H5Writer::H5Writer(std::unique_ptr<State> state) : s_(std::move(state)) {}
+
+H5Writer::State& H5Writer::live(const char* op) {
+  if (!s_) throw OutputError(std::string("H5Writer::") + op + " on a moved-from writer");
+  if (s_->closed) throw OutputError("'" + s_->path + "': " + op + " after close()");
+  quiet();
+  return *s_;
+}
+
+H5Writer::H5Writer(std::string path, const std::string& scene_json, int dimension) : s_(std::make_unique<State>()) {
+  quiet();
+  State& s = *s_;
+  s.path = std::move(path);
+  s.partial = s.path + ".partial";
+  if (dimension < 1 || dimension > 3)
+    throw OutputError("'" + s.path + "': dimension must be 1, 2 or 3, got " + std::to_string(dimension));
+  s.dimension = dimension;
+  Handle fapl = file_access(s.partial);
+  s.file = own(H5Fcreate(s.partial.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose, s.partial,
+               "H5Fcreate (the run file for '" + s.path + "')");
+  write_strings(s.file.get(), "scene", {scene_json}, true, s.partial);
+  write_int(s.file.get(), "dimension", dimension, s.partial);
+  create_group(s.file.get(), "/snapshots", s.partial);
+}
+
+H5Writer H5Writer::append(std::string path) {
+  quiet();
+  auto s = std::make_unique<State>();
+  s->path = std::move(path);
+  s->partial = s->path + ".partial";
+  std::error_code ec;
+  if (fs::exists(s->path, ec)) {
+    // Work on a copy: the complete file stays in place until close() replaces it.
+    fs::copy_file(s->path, s->partial, fs::copy_options::overwrite_existing, ec);
+    if (ec) throw OutputError("cannot copy '" + s->path + "' to '" + s->partial + "': " + ec.message());
+  } else if (!fs::exists(s->partial, ec)) {
+    throw OutputError("cannot continue '" + s->path + "': neither it nor its .partial file exists");
+  }
+  Handle fapl = file_access(s->partial);
+  s->file = own(H5Fopen(s->partial.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose, s->partial, "H5Fopen (append)");
+  s->dimension = static_cast<int>(read_number(s->file.get(), "dimension", s->partial));
+  if (exists(s->file.get(), "/metrics", s->partial)) s->open_metrics();
+  if (!exists(s->file.get(), "/snapshots", s->partial)) create_group(s->file.get(), "/snapshots", s->partial);
+  remove_link(s->file.get(), kCheckpointTmp, s->partial);  // left over if the earlier run died mid-checkpoint
+  return H5Writer(std::move(s));
+}
+
+H5Writer::H5Writer(H5Writer&& o) noexcept = default;
+
+H5Writer& H5Writer::operator=(H5Writer&& o) noexcept {
+  if (this != &o) {
+    finish_quietly();
+    s_ = std::move(o.s_);
+  }
+  return *this;
+}
+
+H5Writer::~H5Writer() { finish_quietly(); }
+
+void H5Writer::finish_quietly() noexcept {
+  try {
+    close();
+  } catch (...) {  // a destructor must not throw; the .partial file keeps what was written
+  }
+}
+
+void H5Writer::set_metric_names(std::vector<std::string> names) {
+  State& s = live("set_metric_names");
+  if (s.metrics.valid()) {
+    if (names == s.metric_names) return;
+    throw OutputError("'" + s.path + "': set_metric_names: the metrics table already has other columns");
+  }
+  if (names.empty()) throw OutputError("'" + s.path + "': set_metric_names: no column names");
+  const hsize_t ncols = names.size();
+  s.chunk_rows = std::max<hsize_t>(1, kMetricsChunkValues / ncols);
+  const hsize_t dims[2] = {0, ncols}, maxdims[2] = {H5S_UNLIMITED, ncols}, chunk[2] = {s.chunk_rows, ncols};
+  Handle space = own(H5Screate_simple(2, dims, maxdims), H5Sclose, s.partial, "H5Screate_simple");
+  Handle dcpl = own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, s.partial, "H5Pcreate");
+  check(H5Pset_chunk(dcpl.get(), 2, chunk), s.partial, "H5Pset_chunk");
+  check(H5Pset_deflate(dcpl.get(), 1), s.partial, "H5Pset_deflate");  // a part-filled chunk then costs little
+  s.metrics = own(H5Dcreate2(s.file.get(), "/metrics", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(),
+                             H5P_DEFAULT),
+                  H5Dclose, s.partial, "H5Dcreate2('/metrics')");
+  write_strings(s.metrics.get(), "columns", names, false, s.partial);
+  s.metric_names = std::move(names);
+  s.rows_in_file = 0;
+}
+
+void H5Writer::add_metrics(std::span<const double> row) {
+  State& s = live("add_metrics");
+  if (!s.metrics.valid()) throw OutputError("'" + s.path + "': add_metrics before set_metric_names");
+  if (row.size() != s.metric_names.size())
+    throw OutputError("'" + s.path + "': add_metrics: row has " + std::to_string(row.size()) +
+                      " values, the table has " + std::to_string(s.metric_names.size()) + " columns");
+  s.pending.insert(s.pending.end(), row.begin(), row.end());
+  if (s.pending.size() / s.metric_names.size() >= s.chunk_rows) s.flush_metrics();
+}
+
+void H5Writer::write_snapshot(long step, double time, std::span<const ColumnView> columns) {
+  State& s = live("write_snapshot");
+  if (step < 0) throw OutputError("'" + s.path + "': write_snapshot: negative step " + std::to_string(step));
+  check_names(columns, s.path, "write_snapshot");
+  for (const auto& c : columns)
+    if (c.values.size() != columns.front().values.size())
+      throw OutputError("'" + s.path + "': write_snapshot: column '" + c.name + "' has " +
+                        std::to_string(c.values.size()) + " values, '" + columns.front().name + "' has " +
+                        std::to_string(columns.front().values.size()));
+  const std::string name = "/snapshots/" + snapshot_name(step);
+  remove_link(s.file.get(), name, s.partial);  // the same step again (e.g. after resume) replaces it
+  Handle g = create_group(s.file.get(), name, s.partial);
+  write_int(g.get(), "step", step, s.partial);
+  write_double(g.get(), "time", time, s.partial);
+  for (const auto& c : columns) write_column(g.get(), c, s.partial);
+}
+
+void H5Writer::write_checkpoint(long step, double time, std::span<const ColumnView> columns,
+                                std::span<const std::pair<std::string, double>> scalars) {
+  State& s = live("write_checkpoint");
+  check_names(columns, s.path, "write_checkpoint");
+  std::set<std::string> seen{"step", "time"};
+  for (const auto& [name, value] : scalars)
+    if (name.empty() || !seen.insert(name).second)
+      throw OutputError("'" + s.path + "': write_checkpoint: scalar name '" + name +
+                        "' is empty, reserved or repeated");
+  s.flush_metrics();  // the metrics belong to the state being saved
+  // Build the new checkpoint beside the old one and swap it in by links, so the old one is never half-replaced.
+  remove_link(s.file.get(), kCheckpointTmp, s.partial);
+  {
+    Handle g = create_group(s.file.get(), kCheckpointTmp, s.partial);
+    write_int(g.get(), "step", step, s.partial);
+    write_double(g.get(), "time", time, s.partial);
+    for (const auto& [name, value] : scalars) write_double(g.get(), name, value, s.partial);
+    for (const auto& c : columns) write_column(g.get(), c, s.partial);
+  }
+  remove_link(s.file.get(), "/checkpoint", s.partial);
+  check(H5Lmove(s.file.get(), kCheckpointTmp, s.file.get(), "/checkpoint", H5P_DEFAULT, H5P_DEFAULT), s.partial,
+        "H5Lmove('/checkpoint')");
+  check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+}
+
+void H5Writer::set_attribute(const std::string& name, const std::string& value) {
+  State& s = live("set_attribute");
+  write_strings(s.file.get(), name, {value}, true, s.partial);
+}
+
+void H5Writer::discard_after(long step, double time) {
+  State& s = live("discard_after");
+  s.flush_metrics();
+  Handle snaps = own(H5Gopen2(s.file.get(), "/snapshots", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/snapshots')");
+  for (const auto& name : link_names(snaps.get(), s.partial)) {
+    long long n = -1;
+    std::from_chars(name.data(), name.data() + name.size(), n);
+    if (n > step) check(H5Ldelete(snaps.get(), name.c_str(), H5P_DEFAULT), s.partial, "H5Ldelete('" + name + "')");
+  }
+  const auto t = std::find(s.metric_names.begin(), s.metric_names.end(), "t");
+  if (!s.metrics.valid() || t == s.metric_names.end()) return;
+  const std::size_t ncols = s.metric_names.size(), col = static_cast<std::size_t>(t - s.metric_names.begin());
+  const auto values = read_all(s.metrics.get(), s.partial, "/metrics");
+  hsize_t keep = 0;
+  while (keep < s.rows_in_file && !(values[keep * ncols + col] > time)) ++keep;
+  if (keep < s.rows_in_file) {
+    const hsize_t dims[2] = {keep, ncols};
+    check(H5Dset_extent(s.metrics.get(), dims), s.partial, "H5Dset_extent('/metrics')");
+    s.rows_in_file = keep;
+  }
+}
+
+void H5Writer::flush() {
+  State& s = live("flush");
+  s.flush_metrics();
+  check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+}
+
+void H5Writer::close() {
+  if (!s_ || s_->closed) return;
+  quiet();
+  State& s = *s_;
+  s.closed = true;  // whatever happens below, do not try again from the destructor
+  s.flush_metrics();
+  const std::string xdmf = s.build_xdmf();
+  s.metrics.reset();
+  check(H5Fclose(s.file.release()), s.partial, "H5Fclose");  // its result matters: this is the final flush
+  std::error_code ec;
+  fs::rename(s.partial, s.path, ec);
+  if (ec) throw OutputError("cannot rename '" + s.partial + "' to '" + s.path + "': " + ec.message());
+  write_text_atomically(xdmf_path(s.path), xdmf);
+}
+
+const std::string& H5Writer::path() const {
+  static const std::string none;
+  return s_ ? s_->path : none;
+}
+
+// ---- free functions -------------------------------------------------------------------------------------------
+
+std::string xdmf_path(const std::string& h5_path) {
+  const std::string ext = ".h5";
+  const bool h5 = h5_path.size() > ext.size() && h5_path.compare(h5_path.size() - ext.size(), ext.size(), ext) == 0;
+  return (h5 ? h5_path.substr(0, h5_path.size() - ext.size()) : h5_path) + ".xdmf";
+}
+
+nlohmann::json read_scene_attribute(const std::string& path) {
+  const auto text = read_string_attribute(path, "/", "scene");
+  if (text.size() != 1) throw OutputError("HDF5 file '" + path + "': attribute 'scene' is not a single string");
+  try {
+    return nlohmann::json::parse(text.front());
+  } catch (const nlohmann::json::exception& e) {
+    throw OutputError("HDF5 file '" + path + "': attribute 'scene' is not valid JSON: " + e.what());
+  }
+}
+
+std::vector<double> read_dataset(const std::string& path, const std::string& dataset) {
+  Handle file = open_read(path);
+  Handle ds = own(H5Dopen2(file.get(), dataset.c_str(), H5P_DEFAULT), H5Dclose, path, "H5Dopen2('" + dataset + "')");
+  return read_all(ds.get(), path, dataset);
+}
+
+std::vector<std::string> list_snapshots(const std::string& path) {
+  Handle file = open_read(path);
+  if (!exists(file.get(), "/snapshots", path)) return {};
+  Handle g = own(H5Gopen2(file.get(), "/snapshots", H5P_DEFAULT), H5Gclose, path, "H5Gopen2('/snapshots')");
+  auto names = link_names(g.get(), path);
+  sort_steps(names);
+  return names;
+}
+
+std::vector<std::string> list_datasets(const std::string& path, const std::string& group) {
+  Handle file = open_read(path);
+  Handle g = own(H5Gopen2(file.get(), group.c_str(), H5P_DEFAULT), H5Gclose, path, "H5Gopen2('" + group + "')");
+  return dataset_names(g.get(), path);
+}
+
+double read_number_attribute(const std::string& path, const std::string& object, const std::string& name) {
+  Handle file = open_read(path);
+  Handle obj = own(H5Oopen(file.get(), object.c_str(), H5P_DEFAULT), H5Oclose, path, "H5Oopen('" + object + "')");
+  return read_number(obj.get(), name, path);
+}
+
+std::vector<std::string> read_string_attribute(const std::string& path, const std::string& object,
+                                               const std::string& name) {
+  Handle file = open_read(path);
+  Handle obj = own(H5Oopen(file.get(), object.c_str(), H5P_DEFAULT), H5Oclose, path, "H5Oopen('" + object + "')");
+  return read_strings(obj.get(), name, path);
+}
+
+}  // namespace mpm

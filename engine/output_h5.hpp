@@ -1,0 +1,107 @@
+#pragma once
+// Run output (DESIGN.md, "Output"): one HDF5 file per run holding the scene, a metrics table, particle snapshots
+// and a restartable checkpoint, plus an XDMF sidecar so ParaView opens the snapshots directly.
+//
+// File layout:
+//   /                  attributes: scene (JSON text), dimension, and whatever set_attribute() adds
+//   /metrics           float64 (rows, ncols), extendible; attribute "columns" = the column names
+//   /snapshots/NNNNNN  one group per snapshot (zero-padded step); attributes step, time; one float64 column each
+//   /checkpoint        the latest restartable state; attributes step, time and named scalars; one column each
+//   /xdmf/ids, zeros   helper data for the sidecar only (vertex connectivity, and the missing y of 1D runs)
+//
+// Crash safety comes from the name, not from HDF5: the file is written as `<path>.partial` and renamed to
+// `<path>` only when it is complete, so `<path>` is never a half-written file. The HDF5 C API stays out of this
+// header, so including it does not drag hdf5.h into the engine.
+#include <memory>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace mpm {
+
+/// Anything that went wrong writing or reading a run file; the message names the file and the HDF5 operation.
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// One named particle column for a snapshot (a view; the writer copies nothing it does not write).
+struct ColumnView {
+  std::string name;
+  std::span<const double> values;
+};
+
+/// Writes a run's HDF5 file under `<path>.partial` and renames it to `<path>` on close(), plus the XDMF sidecar
+/// xdmf_path(path). Not thread-safe: the engine writes from one thread.
+class H5Writer {
+ public:
+  /// Creates `<path>.partial` (truncating a leftover one) with the root attributes "scene" and "dimension".
+  H5Writer(std::string path, const std::string& scene_json, int dimension);
+  /// Continues an existing run file (resume): copies `<path>` to `<path>.partial` and opens that for writing, so
+  /// `<path>` stays intact until close(). If only `<path>.partial` exists (a killed run), continues that one.
+  static H5Writer append(std::string path);
+
+  H5Writer(H5Writer&&) noexcept;
+  H5Writer& operator=(H5Writer&&) noexcept;  // finishes the writer being replaced, like the destructor
+  H5Writer(const H5Writer&) = delete;
+  H5Writer& operator=(const H5Writer&) = delete;
+  /// If close() was not called: flush + close + rename anyway (a failed run keeps its data); never throws.
+  ~H5Writer();
+
+  /// Column names of the metrics table, e.g. {"t","mass","momentum_x",...}; call once before add_metrics.
+  /// (After append() the names are already known; calling it again with the same names is allowed.)
+  void set_metric_names(std::vector<std::string> names);
+  /// Appends one row (size == names.size()). Rows are buffered and written a chunk at a time and on flush.
+  void add_metrics(std::span<const double> row);
+
+  /// Writes group /snapshots/NNNNNN (zero-padded step, replacing one of the same step) with attributes step and
+  /// time and one chunked, shuffled, deflated float64 dataset per column. All columns have the particle count.
+  /// Columns x0, x1 (, x2) are the positions the XDMF sidecar uses as geometry; the others become XDMF attributes.
+  void write_snapshot(long step, double time, std::span<const ColumnView> columns);
+  /// Writes/overwrites group /checkpoint with attributes step, time, the given columns (any lengths) and the named
+  /// scalar attributes; then flushes the file (H5Fflush) so the .partial file is valid after each call.
+  void write_checkpoint(long step, double time, std::span<const ColumnView> columns,
+                        std::span<const std::pair<std::string, double>> scalars);
+  /// Sets (or replaces) a string attribute on the root group, e.g. a summary JSON or a status.
+  void set_attribute(const std::string& name, const std::string& value);
+  /// For resume after append(): drops the snapshots with a step after `step` and the metrics rows whose "t"
+  /// column is after `time` (if there is a "t" column), so the continued run does not record them twice.
+  void discard_after(long step, double time);
+  /// Writes buffered metrics rows and flushes the file to disk.
+  void flush();
+  /// Flush, close, rename .partial -> final, write the .xdmf (also atomically: tmp + rename). Idempotent.
+  void close();
+  /// The final file name.
+  const std::string& path() const;
+
+ private:
+  struct State;
+  explicit H5Writer(std::unique_ptr<State> state);
+  State& live(const char* op);  // the state of an open writer, or OutputError
+  void finish_quietly() noexcept;
+  std::unique_ptr<State> s_;
+};
+
+/// The XDMF sidecar of a run file: `<path minus .h5>.xdmf` (or `<path>.xdmf` if it does not end in .h5).
+std::string xdmf_path(const std::string& h5_path);
+
+// Reading back (tests and resume). All throw OutputError naming the file and what failed.
+
+/// Parses the "scene" root attribute.
+nlohmann::json read_scene_attribute(const std::string& path);
+/// A whole dataset as doubles, e.g. "/snapshots/000010/x0" or "/metrics" (row-major flattened).
+std::vector<double> read_dataset(const std::string& path, const std::string& dataset);
+/// Group names under /snapshots, in step order (empty if there are none).
+std::vector<std::string> list_snapshots(const std::string& path);
+/// Names of the datasets in a group, e.g. "/checkpoint", sorted by name.
+std::vector<std::string> list_datasets(const std::string& path, const std::string& group);
+/// A numeric attribute of an object ("/" for the root), converted to double (e.g. "/checkpoint", "step").
+double read_number_attribute(const std::string& path, const std::string& object, const std::string& name);
+/// A string attribute, or each element of a string-array attribute (e.g. "/metrics", "columns").
+std::vector<std::string> read_string_attribute(const std::string& path, const std::string& object,
+                                               const std::string& name);
+
+}  // namespace mpm

@@ -1,0 +1,165 @@
+#include "engine/problem.hpp"
+
+#include <cmath>
+#include <stdexcept>
+
+#include "engine/material.hpp"
+
+namespace mpm {
+
+using std::numbers::pi;
+
+template <int D>
+std::array<double, D> PlateBodyForce::at(std::size_t p) const {
+  if constexpr (D != 2) {
+    return {};
+  } else {
+    const double wt = c * pi * t / L;
+    const double sx = std::sin(2 * pi * X[0][p] / L), sy = std::sin(2 * pi * X[1][p] / L);
+    const double ux = A * sx * std::sin(wt), uy = A * sy * std::sin(wt + pi);
+    const double F11 = 1 + (2 * pi * A / L) * std::cos(2 * pi * X[0][p] / L) * std::sin(wt);
+    const double F22 = 1 + (2 * pi * A / L) * std::cos(2 * pi * X[1][p] / L) * std::sin(wt + pi);
+    const double common = 4 * mu / rho0 - c * c;
+    const double k = lambda * (std::log(F11 * F22) - 1) - mu;
+    const double f = pi * pi / (L * L);
+    return {f * ux * (common - 4 * k / (rho0 * F11 * F11)), f * uy * (common - 4 * k / (rho0 * F22 * F22))};
+  }
+}
+template std::array<double, 1> PlateBodyForce::at<1>(std::size_t) const;
+template std::array<double, 2> PlateBodyForce::at<2>(std::size_t) const;
+
+template <int Dim>
+BodyForce<Dim> Problem<Dim>::body_force(double, std::array<const double*, Dim>) const {
+  return NoBodyForce{};
+}
+
+template <int Dim>
+ExactState<Dim> Problem<Dim>::exact(const std::array<double, Dim>&, double) const {
+  throw std::logic_error("this problem has no exact solution");
+}
+
+namespace {
+
+/// Bar with fixed ends (thesis §3.4.1): v(x,0) = v0 sin(πx/l), uniaxial strain modulus M = λ + 2μ.
+class VibratingBar final : public Problem<1> {
+ public:
+  VibratingBar(const Scene& s) : mat_(s.material), l_(s.grid.length[0]), v0_(s.problem.v0) {
+    const Lame k = Lame::from(mat_);
+    M_ = k.lambda + 2 * k.mu;
+    c_ = std::sqrt(M_ / mat_.density);
+  }
+  std::vector<Body> bodies() const override {
+    return {{{0.0}, {l_}, mat_, [this](const std::array<double, 1>& X) {
+               return std::array<double, 1>{v0_ * std::sin(pi * X[0] / l_)};
+             }}};
+  }
+  bool has_exact() const override { return true; }
+  ExactState<1> exact(const std::array<double, 1>& X, double t) const override {
+    const double w = pi * c_ / l_;
+    ExactState<1> e;
+    e.u[0] = v0_ / w * std::sin(w * t) * std::sin(pi * X[0] / l_);
+    e.v[0] = v0_ * std::cos(w * t) * std::sin(pi * X[0] / l_);
+    e.sigma[0] = v0_ * mat_.density * c_ * std::sin(w * t) * std::cos(pi * X[0] / l_);  // M ∂u/∂X
+    return e;
+  }
+
+ private:
+  MaterialSpec mat_;
+  double l_, v0_, M_, c_;
+};
+
+/// Axis-aligned vibrating plate, manufactured solution (paper eqs 38–42, PROBLEMS.md).
+class VibratingPlate final : public Problem<2> {
+ public:
+  VibratingPlate(const Scene& s) : mat_(s.material), L_(s.grid.length[0]), A_(s.problem.amplitude) {
+    k_ = Lame::from(mat_);
+    c_ = std::sqrt(mat_.E / mat_.density);
+  }
+  std::vector<Body> bodies() const override {
+    return {{{0.0, 0.0}, {L_, L_}, mat_, [this](const std::array<double, 2>& X) { return exact(X, 0.0).v; }}};
+  }
+  bool body_force_needs_reference() const override { return true; }
+  bool has_body_force() const override { return true; }
+  BodyForce<2> body_force(double t, std::array<const double*, 2> X) const override {
+    return PlateBodyForce{X, A_, L_, c_, k_.lambda, k_.mu, mat_.density, t};
+  }
+  bool has_exact() const override { return true; }
+  ExactState<2> exact(const std::array<double, 2>& X, double t) const override {
+    const double wt = c_ * pi * t / L_;
+    const double sx = std::sin(2 * pi * X[0] / L_), sy = std::sin(2 * pi * X[1] / L_);
+    ExactState<2> e;
+    e.u = {A_ * sx * std::sin(wt), A_ * sy * std::sin(wt + pi)};
+    e.v = {A_ * c_ * pi / L_ * sx * std::cos(wt), A_ * c_ * pi / L_ * sy * std::cos(wt + pi)};
+    const double F11 = 1 + (2 * pi * A_ / L_) * std::cos(2 * pi * X[0] / L_) * std::sin(wt);
+    const double F22 = 1 + (2 * pi * A_ / L_) * std::cos(2 * pi * X[1] / L_) * std::sin(wt + pi);
+    const double J = F11 * F22, lnJ = std::log(J);
+    e.sigma = {(k_.lambda * lnJ + k_.mu * (F11 * F11 - 1)) / J, 0.0, 0.0,
+               (k_.lambda * lnJ + k_.mu * (F22 * F22 - 1)) / J};
+    return e;
+  }
+
+ private:
+  MaterialSpec mat_;
+  Lame k_;
+  double L_, A_, c_;
+};
+
+/// A scene's own bodies with uniform initial velocity, and gravity.
+template <int Dim>
+class UserScene final : public Problem<Dim> {
+ public:
+  using Body = typename Problem<Dim>::Body;
+  UserScene(const Scene& s) {
+    for (const auto& b : s.bodies) {
+      Body body;
+      std::array<double, Dim> v;
+      for (int d = 0; d < Dim; ++d) {
+        body.lo[d] = b.lo[d];
+        body.hi[d] = b.hi[d];
+        v[d] = b.velocity[d];
+      }
+      body.material = b.material.value_or(s.material);
+      body.velocity = [v](const std::array<double, Dim>&) { return v; };
+      bodies_.push_back(body);
+    }
+    for (int d = 0; d < Dim; ++d) {
+      gravity_[d] = s.gravity[d];
+      has_gravity_ = has_gravity_ || s.gravity[d] != 0.0;
+    }
+  }
+  std::vector<Body> bodies() const override { return bodies_; }
+  bool has_body_force() const override { return has_gravity_; }
+  BodyForce<Dim> body_force(double, std::array<const double*, Dim>) const override {
+    if (!has_gravity_) return NoBodyForce{};
+    return UniformBodyForce<Dim>{gravity_};
+  }
+
+ private:
+  std::vector<Body> bodies_;
+  std::array<double, Dim> gravity_{};
+  bool has_gravity_ = false;
+};
+
+}  // namespace
+
+template <int Dim>
+std::unique_ptr<Problem<Dim>> make_problem(const Scene& scene) {
+  switch (scene.problem.name) {
+    case ProblemName::none: return std::make_unique<UserScene<Dim>>(scene);
+    case ProblemName::vibrating_bar:
+      if constexpr (Dim == 1) return std::make_unique<VibratingBar>(scene);
+      break;
+    case ProblemName::vibrating_plate:
+      if constexpr (Dim == 2) return std::make_unique<VibratingPlate>(scene);
+      break;
+    default: break;
+  }
+  throw SceneError("scene: problem.name: this problem is not available in " + std::to_string(Dim) + "D yet");
+}
+
+template class Problem<1>;
+template class Problem<2>;
+template std::unique_ptr<Problem<1>> make_problem<1>(const Scene&);
+template std::unique_ptr<Problem<2>> make_problem<2>(const Scene&);
+
+}  // namespace mpm

@@ -1,0 +1,71 @@
+#pragma once
+// Built-in problems (PROBLEMS.md) and user-described scenes: initial state, body force, fixed sides and, where
+// one exists, the exact solution. Problems are consulted at set-up and observation only; the body force they
+// return is a concrete functor that the scatter kernel inlines.
+#include <array>
+#include <functional>
+#include <memory>
+#include <numbers>
+#include <variant>
+#include <vector>
+
+#include "engine/scene.hpp"
+#include "kernels/transfer.hpp"
+
+namespace mpm {
+
+/// Constant body force per unit mass (gravity, or a load uniform in space at the current time).
+template <int Dim>
+struct UniformBodyForce {
+  static constexpr bool active = true;
+  std::array<double, Dim> b;
+  template <int D>
+  std::array<double, D> at(std::size_t) const { return b; }
+};
+
+/// The manufactured body force of the vibrating plate (paper eq. 42 with π², PROBLEMS.md), at reference positions.
+struct PlateBodyForce {
+  static constexpr bool active = true;
+  std::array<const double*, 2> X;  ///< reference positions
+  double A, L, c, lambda, mu, rho0, t;
+  template <int D>
+  std::array<double, D> at(std::size_t p) const;
+};
+
+template <int Dim>
+using BodyForce = std::conditional_t<Dim == 2, std::variant<NoBodyForce, UniformBodyForce<Dim>, PlateBodyForce>,
+                                     std::variant<NoBodyForce, UniformBodyForce<Dim>>>;
+
+/// Exact fields at a reference position and time.
+template <int Dim>
+struct ExactState {
+  std::array<double, Dim> u{}, v{};
+  std::array<double, Dim * Dim> sigma{};  ///< full Cauchy stress, row-major
+};
+
+template <int Dim>
+class Problem {
+ public:
+  /// A rectangular body: box, material and initial velocity as a function of the reference position.
+  struct Body {
+    std::array<double, Dim> lo, hi;
+    MaterialSpec material;
+    std::function<std::array<double, Dim>(const std::array<double, Dim>&)> velocity;
+  };
+
+  virtual ~Problem() = default;
+  virtual std::vector<Body> bodies() const = 0;
+  /// Whether the body force depends on the reference position (then X is stored per particle).
+  virtual bool body_force_needs_reference() const { return false; }
+  virtual bool has_body_force() const { return false; }
+  /// The body force at time t; `X` are the reference-position columns (null if not stored).
+  virtual BodyForce<Dim> body_force(double t, std::array<const double*, Dim> X) const;
+  virtual bool has_exact() const { return false; }
+  virtual ExactState<Dim> exact(const std::array<double, Dim>& X, double t) const;
+};
+
+/// The problem a scene describes: a built-in one by name, or the scene's own bodies, gravity and sides.
+template <int Dim>
+std::unique_ptr<Problem<Dim>> make_problem(const Scene& scene);
+
+}  // namespace mpm

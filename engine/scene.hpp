@@ -1,0 +1,115 @@
+#pragma once
+// The typed, validated form of a scene file (DESIGN.md, "Scene file" contract).
+// Every field has been range-checked by parse_scene(); the engine never sees raw JSON.
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+namespace mpm {
+
+/// A scene that cannot be run: the message names the key (dotted path), the value and what was expected.
+struct SceneError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+enum class Basis { linear, bspline2, bspline3 };
+enum class BasisPath { fast, generic };
+enum class Layout { uniform, gauss, random };
+enum class MaterialModel { linear_elastic, neo_hookean };
+enum class Update { usl, musl, usf };
+enum class MassMatrix { lumped, projection, consistent };
+enum class Mapping { direct, mls, tls, cubic_spline };
+enum class ProblemName { none, vibrating_bar, vibrating_plate, column_compaction, vibrating_bar_traction };
+
+/// Polynomial degree of a basis choice.
+constexpr int degree_of(Basis b) { return b == Basis::linear ? 1 : b == Basis::bspline2 ? 2 : 3; }
+
+struct GridSpec {
+  std::array<double, 3> length{1, 1, 1};  ///< domain [0, length] per axis, m
+  std::array<int, 3> cells{1, 1, 1};      ///< knot spans per axis
+  Basis basis = Basis::bspline2;
+  BasisPath path = BasisPath::fast;
+};
+
+struct ParticleSpec {
+  std::array<int, 3> per_cell{2, 2, 2};  ///< particles per cell and axis (uniform, gauss); total per cell (random: [0])
+  Layout layout = Layout::uniform;
+  std::uint64_t seed = 1;
+};
+
+struct MaterialSpec {
+  MaterialModel model = MaterialModel::linear_elastic;
+  double E = 1.0e6;         ///< Young's modulus, Pa
+  double nu = 0.0;          ///< Poisson's ratio
+  double density = 1000.0;  ///< reference density, kg/m^3
+};
+
+struct AlgorithmSpec {
+  Update update = Update::musl;
+  MassMatrix mass = MassMatrix::lumped;
+  Mapping mapping = Mapping::direct;
+  std::array<int, 3> gauss_per_cell{2, 2, 2};
+  double mls_support = 2.0;  ///< MLS weight scaling in cells: r = (x - x_p) / (mls_support h); paper eq. 9 prints 2 (support ±3h)
+  int tls_degree = 1;        ///< Taylor basis degree for TLS (0, 1, 2)
+};
+
+struct TimeSpec {
+  std::optional<double> dt;   ///< fixed step, s
+  std::optional<double> cfl;  ///< fraction of the critical step (replaces dt)
+  double end = 0.0;           ///< end time, s
+};
+
+struct OutputSpec {
+  std::string file;          ///< HDF5 output; empty: none
+  int every = 0;             ///< snapshot interval in steps; 0: first and last only
+  int checkpoint_every = 0;  ///< full-state interval in steps; 0: none
+};
+
+/// A rectangular body of a user-described scene.
+struct BodySpec {
+  std::array<double, 3> lo{0, 0, 0}, hi{0, 0, 0};
+  std::array<double, 3> velocity{0, 0, 0};
+  std::optional<MaterialSpec> material;  ///< the scene's material if absent
+};
+
+/// Parameters of a built-in problem (PROBLEMS.md); each problem reads the ones it knows.
+struct ProblemSpec {
+  ProblemName name = ProblemName::none;
+  double v0 = 0.28;               ///< vibrating-bar: peak initial velocity, m/s
+  double amplitude = 0.1;         ///< vibrating-plate: A, m
+  double height = 50.0;           ///< column-compaction: H, m
+  double max_body_force = -200.0; ///< column-compaction: b_f, m/s^2
+  double ramp_time = 0.5;         ///< column-compaction: t_f, s
+};
+
+/// Sides are "x-", "x+", "y-", "y+" (, "z-", "z+"): axis = index / 2, upper = index % 2.
+struct Scene {
+  int dimension = 1;
+  ProblemSpec problem;
+  GridSpec grid;
+  ParticleSpec particles;
+  MaterialSpec material;
+  AlgorithmSpec algorithm;
+  TimeSpec time;
+  OutputSpec output;
+  std::vector<BodySpec> bodies;
+  std::array<double, 3> gravity{0, 0, 0};
+  std::vector<int> fixed_sides;  ///< normal component fixed on these sides (0: x-, 1: x+, 2: y-, ...)
+  nlohmann::json source;         ///< the scene as given, after --set overrides and with defaults filled in
+};
+
+/// Parses and validates a scene. Throws SceneError naming the key, value and expectation.
+Scene parse_scene(const nlohmann::json& j);
+/// Reads a file (a JSON syntax error gives line and column) and parses it.
+Scene load_scene_file(const std::string& path);
+/// Reads JSON text; `origin` names it in error messages.
+nlohmann::json read_json_text(const std::string& text, const std::string& origin);
+/// Applies one `--set KEY=VALUE` override (dotted path, JSON value or bare string) to a raw scene.
+void apply_override(nlohmann::json& scene, const std::string& assignment);
+
+}  // namespace mpm

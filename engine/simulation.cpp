@@ -1,0 +1,615 @@
+#include "engine/simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+#include <sstream>
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
+
+#include "kernels/quadrature.hpp"
+#include "kernels/transfer.hpp"
+
+namespace mpm {
+
+namespace {
+
+constexpr std::size_t particle_grain = 2048;  // particles per task of the gather loops
+constexpr int reorder_every = 16;              // steps between permutations of the particles into block order
+constexpr double cg_tolerance = 1e-14;         // relative residual of the consistent-mass solves
+constexpr int cg_max_iterations = 1000;
+
+/// Deterministic parallel sum of f(i) over [0, n): fixed chunks, fixed combination order.
+template <class F>
+double deterministic_sum(std::size_t n, F&& f) {
+  return tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 4096), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double acc) {
+        for (std::size_t i = r.begin(); i < r.end(); ++i) acc += f(i);
+        return acc;
+      },
+      std::plus<>());
+}
+
+template <class F>
+void parallel_over(std::size_t n, std::size_t grain, F&& f) {
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
+                    [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
+}
+
+/// Local coordinates in [0, 1) of the particles of one cell, per axis, and their volume fractions.
+struct CellLayout {
+  std::vector<std::vector<double>> coords;  ///< per particle: Dim coordinates
+  std::vector<double> fraction;             ///< per particle: share of the cell volume
+};
+
+CellLayout cell_layout(const ParticleSpec& spec, int dim, std::mt19937_64* rng) {
+  CellLayout out;
+  if (spec.layout == Layout::random) {
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    const int n = spec.per_cell[0];
+    for (int k = 0; k < n; ++k) {
+      std::vector<double> c(dim);
+      for (auto& x : c) x = u(*rng);
+      out.coords.push_back(c);
+      out.fraction.push_back(1.0 / n);
+    }
+    return out;
+  }
+  std::vector<GaussRule> rules(dim);
+  for (int d = 0; d < dim; ++d) {
+    const int n = spec.per_cell[d];
+    if (spec.layout == Layout::gauss) {
+      rules[d] = gauss_legendre(n);
+    } else {
+      for (int k = 0; k < n; ++k) {
+        rules[d].x.push_back((k + 0.5) / n);  // cell sub-centres
+        rules[d].w.push_back(1.0 / n);
+      }
+    }
+  }
+  const int n0 = spec.per_cell[0], n1 = dim > 1 ? spec.per_cell[1] : 1;
+  for (int j = 0; j < n1; ++j)
+    for (int i = 0; i < n0; ++i) {
+      std::vector<double> c{rules[0].x[i]};
+      double w = rules[0].w[i];
+      if (dim > 1) {
+        c.push_back(rules[1].x[j]);
+        w *= rules[1].w[j];
+      }
+      out.coords.push_back(c);
+      out.fraction.push_back(w);
+    }
+  return out;
+}
+
+template <int Dim>
+FieldSet needed_fields(const Problem<Dim>& problem) {
+  FieldSet f;
+  f.add(Field::position).add(Field::velocity).add(Field::deformation).add(Field::stress);
+  f.add(Field::mass).add(Field::volume0);
+  if (problem.has_exact() || problem.body_force_needs_reference()) f.add(Field::reference);
+  return f;
+}
+
+/// Particles of every body, generated per cell of the grid: positions, reference volume, mass, velocity.
+template <int Dim>
+struct Seeds {
+  std::vector<std::array<double, Dim>> x;
+  std::vector<double> V0, m;
+  std::vector<std::array<double, Dim>> v;
+};
+
+template <int Dim>
+Seeds<Dim> seed_particles(const Scene& scene, const Problem<Dim>& problem) {
+  Seeds<Dim> s;
+  std::mt19937_64 rng(scene.particles.seed);
+  std::array<double, Dim> h;
+  double cell_volume = 1.0;
+  for (int d = 0; d < Dim; ++d) {
+    h[d] = scene.grid.length[d] / scene.grid.cells[d];
+    cell_volume *= h[d];
+  }
+  const bool random = scene.particles.layout == Layout::random;
+  const CellLayout fixed_layout = random ? CellLayout{} : cell_layout(scene.particles, Dim, nullptr);
+  for (const auto& body : problem.bodies()) {
+    std::array<int, Dim> c0, c1;
+    for (int d = 0; d < Dim; ++d) {
+      c0[d] = std::max(0, static_cast<int>(std::floor(body.lo[d] / h[d] + 1e-9)));
+      c1[d] = std::min(scene.grid.cells[d], static_cast<int>(std::ceil(body.hi[d] / h[d] - 1e-9)));
+    }
+    const int n1 = Dim > 1 ? c1[Dim - 1] - c0[Dim - 1] : 1;
+    for (int j = 0; j < n1; ++j)
+      for (int i = c0[0]; i < c1[0]; ++i) {
+        const CellLayout layout = random ? cell_layout(scene.particles, Dim, &rng) : CellLayout{};
+        const CellLayout& cl = random ? layout : fixed_layout;
+        for (std::size_t k = 0; k < cl.fraction.size(); ++k) {
+          std::array<double, Dim> x;
+          bool inside = true;
+          for (int d = 0; d < Dim; ++d) {
+            const int cell = d == 0 ? i : c0[1] + j;
+            x[d] = (cell + cl.coords[k][d]) * h[d];
+            inside = inside && x[d] >= body.lo[d] && x[d] < body.hi[d];
+          }
+          if (!inside) continue;
+          const double V = cl.fraction[k] * cell_volume;
+          s.x.push_back(x);
+          s.V0.push_back(V);
+          s.m.push_back(V * body.material.density);
+          s.v.push_back(body.velocity(x));
+        }
+      }
+  }
+  return s;
+}
+
+template <int Dim>
+std::vector<std::string> assemble_pipeline(const Scene& scene, bool body_force) {
+  const bool consistent_v = scene.algorithm.mass != MassMatrix::lumped;
+  const bool consistent_a = scene.algorithm.mass == MassMatrix::consistent;
+  const std::string p2g_force = body_force ? "p2g-force+body-force" : "p2g-force";
+  const std::string accel = consistent_a ? "grid-acceleration-cg" : "grid-acceleration";
+  const std::string vel = consistent_v ? "grid-velocity-cg" : "grid-velocity";
+  switch (scene.algorithm.update) {
+    case Update::usl:
+      return {"bin", "p2g-mass-momentum", p2g_force, accel, vel, "g2p-velocity-position-deformation", "stress"};
+    case Update::musl:
+      return {"bin", "p2g-mass", p2g_force, accel, "g2p-velocity", "p2g-momentum", vel,
+              "g2p-position-deformation", "stress"};
+    case Update::usf:
+      return {"bin", "p2g-mass-momentum", vel, "g2p-deformation", "stress", p2g_force, accel,
+              "g2p-velocity-position"};
+  }
+  return {};
+}
+
+template <int Dim>
+long count_steps(const Scene& scene, double dt) {
+  const double n = scene.time.end / dt;
+  const long rounded = std::lround(n);
+  return std::abs(n - rounded) < 1e-9 * std::max(1.0, n) ? std::max(1L, rounded) : static_cast<long>(std::ceil(n));
+}
+
+}  // namespace
+
+template <int Dim>
+GridView<Dim> GridState<Dim>::view() {
+  GridView<Dim> g;
+  g.stride1 = stride1;
+  g.dofs = dofs;
+  g.m = m.data();
+  for (int d = 0; d < Dim; ++d) {
+    g.q[d] = q[d].data();
+    g.f[d] = f[d].data();
+    g.v[d] = v[d].data();
+    g.a[d] = a[d].data();
+  }
+  return g;
+}
+
+template <int Dim>
+AnyBasis<Dim> make_basis(const GridSpec& grid) {
+  const int p = degree_of(grid.basis);
+  auto build = [&](auto axis_of) {
+    using Axis = decltype(axis_of(0));
+    std::array<int, Dim> functions;
+    for (int d = 0; d < Dim; ++d) functions[d] = grid.cells[d] + p;
+    if constexpr (Dim == 1) return AnyBasis<Dim>(TensorBasis<Dim, Axis>{{axis_of(0)}, functions});
+    else return AnyBasis<Dim>(TensorBasis<Dim, Axis>{{axis_of(0), axis_of(1)}, functions});
+  };
+  auto knots = [&](int d) { return KnotVector::open_uniform(p, grid.cells[d], grid.length[d]); };
+  if (grid.path == BasisPath::fast && p <= 2) {
+    if (p == 1) return build([&](int d) { return UniformAxis<2>(grid.cells[d], grid.length[d]); });
+    return build([&](int d) { return UniformAxis<3>(grid.cells[d], grid.length[d]); });
+  }
+  if (p == 1) return build([&](int d) { return CoxDeBoorAxis<2>{knots(d)}; });
+  if (p == 2) return build([&](int d) { return CoxDeBoorAxis<3>{knots(d)}; });
+  return build([&](int d) { return CoxDeBoorAxis<4>{knots(d)}; });
+}
+
+template <int Dim>
+Simulation<Dim>::Simulation(const Scene& scene)
+    : scene_(scene),
+      problem_(make_problem<Dim>(scene)),
+      material_(make_material(scene.material)),
+      basis_(make_basis<Dim>(scene.grid)),
+      store_(0, FieldSet{}),
+      bins_([&] {
+        std::array<int, Dim> c;
+        std::array<double, Dim> l;
+        for (int d = 0; d < Dim; ++d) {
+          c[d] = scene.grid.cells[d];
+          l[d] = scene.grid.length[d];
+        }
+        return CellBins<Dim>(c, l, std::max(2, degree_of(scene.grid.basis)) * 2);
+      }()) {
+  if (scene.dimension != Dim) throw std::logic_error("Simulation: scene dimension does not match");
+  if (scene.algorithm.mapping != Mapping::direct)
+    throw SceneError("scene: algorithm.mapping = \"" + scene.source["algorithm"].value("mapping", std::string()) +
+                     "\": only \"direct\" is available in this build");
+
+  // time step: given, or a fraction of the critical step h_min / c of the stiffest body
+  double h_min = 1e300, c_max = 0.0;
+  for (int d = 0; d < Dim; ++d) h_min = std::min(h_min, scene.grid.length[d] / scene.grid.cells[d]);
+  for (const auto& b : problem_->bodies()) c_max = std::max(c_max, wave_speed(b.material));
+  const double dt_critical = h_min / c_max;
+  if (scene.time.cfl) {
+    dt_ = *scene.time.cfl * dt_critical;
+  } else {
+    dt_ = *scene.time.dt;
+    if (dt_ > dt_critical) {
+      std::ostringstream msg;
+      msg << "scene: time.dt = " << dt_ << ": expected at most the critical step h/c = " << dt_critical
+          << " s (cell size " << h_min << " m, wave speed " << c_max << " m/s)";
+      throw SceneError(msg.str());
+    }
+  }
+  steps_total_ = count_steps<Dim>(scene, dt_);
+
+  const Seeds<Dim> seeds = seed_particles(scene, *problem_);
+  const std::size_t n = seeds.x.size();
+  if (n == 0) throw SceneError("scene: bodies: no particle falls inside any body");
+  store_ = ParticleStore<Dim>(n, needed_fields(*problem_));
+  auto pv = store_.view();
+  for (std::size_t p = 0; p < n; ++p) {
+    for (int d = 0; d < Dim; ++d) {
+      pv.x[d][p] = seeds.x[p][d];
+      pv.v[d][p] = seeds.v[p][d];
+      if (pv.X[d]) store_.column(Field::reference, d)[p] = seeds.x[p][d];
+    }
+    for (int a = 0; a < Dim; ++a) pv.F[a * Dim + a][p] = 1.0;
+    store_.column(Field::mass)[p] = seeds.m[p];
+    store_.column(Field::volume0)[p] = seeds.V0[p];
+    particle_mass_ += seeds.m[p];
+  }
+  empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
+
+  grid_.stride1 = scene.grid.cells[0] + degree_of(scene.grid.basis);
+  grid_.dofs = 1;
+  for (int d = 0; d < Dim; ++d) grid_.dofs *= scene.grid.cells[d] + degree_of(scene.grid.basis);
+  grid_.m.assign(grid_.dofs, 0.0);
+  for (int d = 0; d < Dim; ++d) {
+    for (auto* a : {&grid_.q[d], &grid_.f[d], &grid_.v[d], &grid_.a[d]}) a->assign(grid_.dofs, 0.0);
+    grid_.fixed[d].assign(grid_.dofs, 0);
+  }
+  // fixed sides: the first or last function along the side's normal axis carries the boundary value
+  for (int side : scene.fixed_sides) {
+    const int axis = side / 2;
+    if (axis >= Dim) continue;
+    const int nf = scene.grid.cells[axis] + degree_of(scene.grid.basis);
+    const int index = side % 2 ? nf - 1 : 0;
+    for (int dof = 0; dof < grid_.dofs; ++dof) {
+      const int along = axis == 0 ? dof % grid_.stride1 : dof / grid_.stride1;
+      if (along == index) grid_.fixed[axis][dof] = 1;
+    }
+  }
+  if (scene.algorithm.mass != MassMatrix::lumped)
+    for (int d = 0; d < Dim; ++d)
+      for (auto* a : {&cg_r_[d], &cg_z_[d], &cg_p_[d], &cg_Ap_[d], &cg_x_[d]}) a->assign(grid_.dofs, 0.0);
+
+  pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force());
+  // initial stress from F = I is zero for both laws
+}
+
+template <int Dim>
+Simulation<Dim>::~Simulation() = default;
+
+template <int Dim>
+void Simulation<Dim>::restore_clock(long step, double time) {
+  step_ = step;
+  time_ = time;
+}
+
+template <int Dim>
+void Simulation<Dim>::step() {
+  const double dt = step_ + 1 == steps_total_ ? scene_.time.end - dt_ * step_ : dt_;
+  // bin first: the periodic reordering moves the columns, so every pointer into them is taken after it
+  std::array<const double*, Dim> x;
+  for (int d = 0; d < Dim; ++d) x[d] = store_.column(Field::position, d).data();
+  bins_.bin(x, store_.size());
+  if (step_ % reorder_every == 0) {
+    store_.permute(bins_.order());
+    bins_.adopt_order();
+  }
+  std::array<const double*, Dim> X{};
+  if (store_.has(Field::reference))
+    for (int d = 0; d < Dim; ++d) X[d] = store_.column(Field::reference, d).data();
+  const BodyForce<Dim> body = problem_->body_force(time_, X);
+  std::visit([&](const auto& basis, const auto& material,
+                 const auto& force) { step_with(basis, material, force, dt); },
+             basis_, material_, body);
+  ++step_;
+  time_ = step_ == steps_total_ ? scene_.time.end : dt_ * step_;
+}
+
+template <int Dim>
+void Simulation<Dim>::clear_grid(bool mass, bool momentum, bool force) {
+  parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
+    if (mass) std::fill(grid_.m.begin() + b, grid_.m.begin() + e, 0.0);
+    for (int d = 0; d < Dim; ++d) {
+      if (momentum) std::fill(grid_.q[d].begin() + b, grid_.q[d].begin() + e, 0.0);
+      if (force) std::fill(grid_.f[d].begin() + b, grid_.f[d].begin() + e, 0.0);
+    }
+  });
+}
+
+template <int Dim>
+void Simulation<Dim>::check_mass() {
+  const double grid_mass = deterministic_sum(grid_.dofs, [&](std::size_t i) { return grid_.m[i]; });
+  conservation_.mass_rel_max =
+      std::max(conservation_.mass_rel_max, std::abs(grid_mass - particle_mass_) / particle_mass_);
+}
+
+template <int Dim>
+void Simulation<Dim>::check_momentum() {
+  const auto pv = store_.view();
+  const double scale = deterministic_sum(store_.size(), [&](std::size_t p) {
+    double v2 = 0.0;
+    for (int d = 0; d < Dim; ++d) v2 += pv.v[d][p] * pv.v[d][p];
+    return pv.m[p] * std::sqrt(v2);
+  });
+  if (scale == 0.0) return;
+  double worst = 0.0;
+  for (int d = 0; d < Dim; ++d) {
+    const double particles = deterministic_sum(store_.size(), [&](std::size_t p) { return pv.m[p] * pv.v[d][p]; });
+    const double grid = deterministic_sum(grid_.dofs, [&](std::size_t i) { return grid_.q[d][i]; });
+    worst = std::max(worst, std::abs(grid - particles) / scale);
+  }
+  conservation_.momentum_rel_max = std::max(conservation_.momentum_rel_max, worst);
+}
+
+template <int Dim>
+void Simulation<Dim>::apply_fixed(std::array<std::vector<double>, Dim>& field) {
+  for (int d = 0; d < Dim; ++d)
+    for (int i = 0; i < grid_.dofs; ++i)
+      if (grid_.fixed[d][i]) field[d][i] = 0.0;
+}
+
+template <int Dim>
+void Simulation<Dim>::raise_unstable(std::size_t p, const char* stage) const {
+  const auto& s = store_;
+  std::ostringstream msg;
+  msg.precision(6);
+  msg << "unstable at step " << step_ + 1 << " (t = " << time_ + dt_ << " s), " << stage << ": particle " << p
+      << " at x = (";
+  for (int d = 0; d < Dim; ++d) msg << (d ? ", " : "") << s.column(Field::position, d)[p];
+  double J = s.column(Field::deformation, 0)[p];
+  if constexpr (Dim == 2)
+    J = J * s.column(Field::deformation, 3)[p] - s.column(Field::deformation, 1)[p] * s.column(Field::deformation, 2)[p];
+  msg << "), J = " << J << ", v = (";
+  for (int d = 0; d < Dim; ++d) msg << (d ? ", " : "") << s.column(Field::velocity, d)[p];
+  msg << ")";
+  bool outside = false;
+  for (int d = 0; d < Dim; ++d) {
+    const double x = s.column(Field::position, d)[p];
+    outside = outside || !(x >= 0.0 && x <= scene_.grid.length[d]);
+  }
+  msg << (!std::isfinite(J) ? ": non-finite deformation" : !(J > 0) ? ": J <= 0" : outside ? ": left the grid" : ": non-finite value");
+  throw UnstableRun(msg.str());
+}
+
+/// Consistent-mass solve M x = rhs on the free DOFs (not fixed, not empty), per component, by conjugate gradients
+/// with the lumped mass as (Jacobi) preconditioner; M is applied matrix-free (transfer.hpp). Thesis eqs 3.9–3.10.
+template <int Dim>
+template <class B>
+void Simulation<Dim>::solve_consistent(const B& basis, std::array<std::vector<double>, Dim>& x,
+                                       const std::array<std::vector<double>, Dim>& rhs) {
+  constexpr int S = B::width;
+  const auto pv = store_.view();
+  const std::size_t n = grid_.dofs;
+  auto free_dof = [&](int d, std::size_t i) { return !grid_.fixed[d][i] && grid_.m[i] > empty_mass_; };
+  auto apply = [&](const std::array<std::vector<double>, Dim>& in, std::array<std::vector<double>, Dim>& out) {
+    std::array<const double*, Dim> xin;
+    std::array<double*, Dim> yout;
+    for (int d = 0; d < Dim; ++d) {
+      std::fill(out[d].begin(), out[d].end(), 0.0);
+      xin[d] = in[d].data();
+      yout[d] = out[d].data();
+    }
+    const unsigned* order = bins_.order().data();
+    bins_.for_each_block_coloured([&](std::size_t b, std::size_t e) {
+      apply_consistent_mass<Dim, S>(basis, pv, grid_.stride1, xin, yout, order, b, e);
+    });
+  };
+  // start from the lumped solution, masked
+  for (int d = 0; d < Dim; ++d)
+    for (std::size_t i = 0; i < n; ++i) x[d][i] = free_dof(d, i) ? rhs[d][i] / grid_.m[i] : 0.0;
+  apply(x, cg_Ap_);
+  std::array<double, Dim> rz{}, norm_b{};
+  std::array<bool, Dim> done{};
+  for (int d = 0; d < Dim; ++d) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const bool f = free_dof(d, i);
+      cg_r_[d][i] = f ? rhs[d][i] - cg_Ap_[d][i] : 0.0;
+      cg_z_[d][i] = f ? cg_r_[d][i] / grid_.m[i] : 0.0;
+      cg_p_[d][i] = cg_z_[d][i];
+      rz[d] += cg_r_[d][i] * cg_z_[d][i];
+      norm_b[d] += f ? rhs[d][i] * rhs[d][i] : 0.0;
+    }
+    norm_b[d] = std::sqrt(norm_b[d]);
+  }
+  int it = 0;
+  for (; it < cg_max_iterations; ++it) {
+    bool all_done = true;
+    for (int d = 0; d < Dim; ++d) {
+      double rr = 0.0;
+      for (std::size_t i = 0; i < n; ++i) rr += cg_r_[d][i] * cg_r_[d][i];
+      done[d] = std::sqrt(rr) <= cg_tolerance * norm_b[d];
+      all_done = all_done && done[d];
+    }
+    if (all_done) break;
+    apply(cg_p_, cg_Ap_);
+    for (int d = 0; d < Dim; ++d) {
+      if (done[d]) continue;
+      double pAp = 0.0;
+      for (std::size_t i = 0; i < n; ++i)
+        if (free_dof(d, i)) pAp += cg_p_[d][i] * cg_Ap_[d][i];
+      const double alpha = rz[d] / pAp;
+      double rz_new = 0.0;
+      for (std::size_t i = 0; i < n; ++i) {
+        if (!free_dof(d, i)) continue;
+        x[d][i] += alpha * cg_p_[d][i];
+        cg_r_[d][i] -= alpha * cg_Ap_[d][i];
+        cg_z_[d][i] = cg_r_[d][i] / grid_.m[i];
+        rz_new += cg_r_[d][i] * cg_z_[d][i];
+      }
+      const double beta = rz_new / rz[d];
+      rz[d] = rz_new;
+      for (std::size_t i = 0; i < n; ++i) cg_p_[d][i] = free_dof(d, i) ? cg_z_[d][i] + beta * cg_p_[d][i] : 0.0;
+    }
+  }
+  cg_iterations_ += it;
+}
+
+template <int Dim>
+template <class B, class M, class F>
+void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body, double dt) {
+  constexpr int S = B::width;
+  const std::size_t np = store_.size();
+  cg_iterations_ = 0;
+  const auto pv = store_.view();
+  const auto gv = grid_.view();
+  const unsigned* order = bins_.order().data();
+  const auto stress = [&](const double* Fp, double* s) { material.template stress<Dim>(Fp, s); };
+  ParticleGuard guard;
+  for (int d = 0; d < Dim; ++d) guard.hi[d] = scene_.grid.length[d];
+
+  auto scatter = [&]<ScatterFields Fields>() {
+    bins_.for_each_block_coloured(
+        [&](std::size_t b, std::size_t e) { scatter_p2g<Fields, Dim, S>(basis, pv, gv, order, b, e, body); });
+  };
+  auto gather = [&]<GatherFields Fields>(const char* stage) {
+    parallel_over(np, particle_grain,
+                  [&](std::size_t b, std::size_t e) { gather_g2p<Fields, Dim, S>(basis, pv, gv, b, e, dt, stress, guard); });
+    const std::size_t bad = guard.first_bad.load();
+    if (bad != ParticleGuard::none) raise_unstable(bad, stage);
+  };
+  const bool consistent_a = scene_.algorithm.mass == MassMatrix::consistent;
+  const bool consistent_v = scene_.algorithm.mass != MassMatrix::lumped;
+  // a = M⁻¹ f (eqs 2.34, 2.46); empty and fixed DOFs get none
+  auto accelerations = [&] {
+    if (consistent_a) {
+      solve_consistent(basis, grid_.a, grid_.f);
+    } else {
+      parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i)
+          for (int d = 0; d < Dim; ++d)
+            grid_.a[d][i] = grid_.m[i] > empty_mass_ && !grid_.fixed[d][i] ? grid_.f[d][i] / grid_.m[i] : 0.0;
+      });
+    }
+  };
+  // v = M⁻¹ q (eqs 2.35, 2.49; with the consistent mass, thesis eq. 3.10)
+  auto velocities = [&] {
+    if (consistent_v) {
+      solve_consistent(basis, grid_.v, grid_.q);
+    } else {
+      parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i)
+          for (int d = 0; d < Dim; ++d)
+            grid_.v[d][i] = grid_.m[i] > empty_mass_ && !grid_.fixed[d][i] ? grid_.q[d][i] / grid_.m[i] : 0.0;
+      });
+    }
+  };
+  auto advance_velocities = [&] {  // v^{s+1} = v^s + Δt a (eq. 2.36)
+    parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i)
+        for (int d = 0; d < Dim; ++d) grid_.v[d][i] += dt * grid_.a[d][i];
+    });
+  };
+
+  switch (scene_.algorithm.update) {
+    case Update::usl:  // thesis Algorithm 1
+      clear_grid(true, true, true);
+      scatter.template operator()<ScatterFields{true, true, true}>();
+      check_mass();
+      check_momentum();
+      accelerations();
+      velocities();
+      advance_velocities();
+      gather.template operator()<GatherFields{true, true, true}>("g2p");
+      break;
+    case Update::musl:  // thesis Algorithm 2
+      clear_grid(true, false, true);
+      scatter.template operator()<ScatterFields{true, false, true}>();
+      check_mass();
+      accelerations();
+      gather.template operator()<GatherFields{true, false, false}>("g2p-velocity");
+      clear_grid(false, true, false);
+      scatter.template operator()<ScatterFields{false, true, false}>();
+      check_momentum();
+      velocities();
+      gather.template operator()<GatherFields{false, true, true}>("g2p-position-deformation");
+      break;
+    case Update::usf:  // stress first, from the velocities mapped at the start of the step
+      clear_grid(true, true, true);
+      scatter.template operator()<ScatterFields{true, true, false}>();
+      check_mass();
+      check_momentum();
+      velocities();
+      gather.template operator()<GatherFields{false, false, true}>("g2p-deformation");
+      scatter.template operator()<ScatterFields{false, false, true}>();
+      accelerations();
+      advance_velocities();
+      gather.template operator()<GatherFields{true, true, false}>("g2p-velocity-position");
+      break;
+  }
+}
+
+template <int Dim>
+RunErrors Simulation<Dim>::errors() const {
+  const auto& s = store_;
+  const std::size_t n = s.size();
+  std::array<std::span<const double>, Dim> x, X, v;
+  for (int d = 0; d < Dim; ++d) {
+    x[d] = s.column(Field::position, d);
+    X[d] = s.column(Field::reference, d);
+    v[d] = s.column(Field::velocity, d);
+  }
+  std::array<std::span<const double>, sym_components<Dim>> sig;
+  for (int c = 0; c < sym_components<Dim>; ++c) sig[c] = s.column(Field::stress, c);
+  double eu = 0, ev = 0, es = 0;
+  for (std::size_t p = 0; p < n; ++p) {
+    std::array<double, Dim> Xp;
+    for (int d = 0; d < Dim; ++d) Xp[d] = X[d][p];
+    const ExactState<Dim> ex = problem_->exact(Xp, time_);
+    for (int d = 0; d < Dim; ++d) {
+      eu += std::pow(x[d][p] - X[d][p] - ex.u[d], 2);
+      ev += std::pow(v[d][p] - ex.v[d], 2);
+    }
+    for (int a = 0; a < Dim; ++a)
+      for (int b = 0; b < Dim; ++b) es += std::pow(sig[sym_index<Dim>(a, b)][p] - ex.sigma[a * Dim + b], 2);
+  }
+  return {std::sqrt(eu / n), std::sqrt(ev / n), std::sqrt(es / n)};
+}
+
+template <int Dim>
+Energy Simulation<Dim>::energy() const {
+  Energy e;
+  const auto& s = store_;
+  const auto m = s.column(Field::mass);
+  const auto V0 = s.column(Field::volume0);
+  e.kinetic = deterministic_sum(s.size(), [&](std::size_t p) {
+    double v2 = 0;
+    for (int d = 0; d < Dim; ++d) v2 += s.column(Field::velocity, d)[p] * s.column(Field::velocity, d)[p];
+    return 0.5 * m[p] * v2;
+  });
+  e.strain = std::visit(
+      [&](const auto& mat) {
+        return deterministic_sum(s.size(), [&](std::size_t p) {
+          double F[Dim * Dim];
+          for (int c = 0; c < Dim * Dim; ++c) F[c] = s.column(Field::deformation, c)[p];
+          return V0[p] * mat.template energy_density<Dim>(F);
+        });
+      },
+      material_);
+  return e;
+}
+
+template class Simulation<1>;
+template class Simulation<2>;
+template AnyBasis<1> make_basis<1>(const GridSpec&);
+template AnyBasis<2> make_basis<2>(const GridSpec&);
+
+}  // namespace mpm

@@ -1,0 +1,127 @@
+#pragma once
+// One explicit MPM run: particle store, grid, and the step sequence of the chosen update scheme (thesis
+// Algorithm 1: USL, Algorithm 2: MUSL, and USF), assembled once from the scene so that a run carries only the
+// stages and particle columns it needs.
+#include <array>
+#include <cstddef>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "engine/cell_bins.hpp"
+#include "engine/material.hpp"
+#include "engine/particle_store.hpp"
+#include "engine/problem.hpp"
+#include "engine/scene.hpp"
+#include "kernels/stencil.hpp"
+
+namespace mpm {
+
+/// The run became unstable: the message names the step, particle, position and quantity.
+struct UnstableRun : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Maximum relative differences between particle and grid totals after any P2G so far.
+struct Conservation {
+  double mass_rel_max = 0.0;
+  double momentum_rel_max = 0.0;
+};
+
+/// RMS errors over particles against the exact solution (paper eq. 43).
+struct RunErrors {
+  double displacement_rms = 0.0, velocity_rms = 0.0, stress_rms = 0.0;
+};
+
+struct Energy {
+  double kinetic = 0.0, strain = 0.0;
+  double total() const { return kinetic + strain; }
+};
+
+/// Every basis the engine can run, resolved once per step.
+template <int Dim>
+using AnyBasis = std::variant<TensorBasis<Dim, UniformAxis<2>>, TensorBasis<Dim, UniformAxis<3>>,
+                              TensorBasis<Dim, CoxDeBoorAxis<2>>, TensorBasis<Dim, CoxDeBoorAxis<3>>,
+                              TensorBasis<Dim, CoxDeBoorAxis<4>>>;
+
+template <int Dim>
+AnyBasis<Dim> make_basis(const GridSpec& grid);
+
+/// Grid arrays, one entry per DOF (tensor-product basis function).
+template <int Dim>
+struct GridState {
+  int stride1 = 0, dofs = 0;
+  std::vector<double> m;
+  std::array<std::vector<double>, Dim> q, f, v, a;
+  std::array<std::vector<unsigned char>, Dim> fixed;  ///< normal component fixed (1) per DOF and axis
+  GridView<Dim> view();
+};
+
+template <int Dim>
+class Simulation {
+ public:
+  /// Builds the particles and grid of a validated scene. Throws SceneError for a scene it cannot run.
+  explicit Simulation(const Scene& scene);
+  ~Simulation();
+
+  /// Advances one time step. Throws UnstableRun if a particle's state became invalid.
+  void step();
+
+  bool finished() const { return step_ >= steps_total_; }
+  long steps_done() const { return step_; }
+  long steps_total() const { return steps_total_; }
+  double time() const { return time_; }
+  double dt() const { return dt_; }
+
+  const Scene& scene() const { return scene_; }
+  ParticleStore<Dim>& particles() { return store_; }
+  const ParticleStore<Dim>& particles() const { return store_; }
+  const GridState<Dim>& grid() const { return grid_; }
+  /// Stage names of one step, in order.
+  const std::vector<std::string>& pipeline() const { return pipeline_; }
+
+  const Conservation& conservation() const { return conservation_; }
+  bool has_exact() const { return problem_->has_exact(); }
+  RunErrors errors() const;
+  Energy energy() const;
+  /// CG iterations of the consistent-mass solves in the last step (0 for lumped mass).
+  int last_cg_iterations() const { return cg_iterations_; }
+
+  /// Restores time and step counter (checkpoint resume); the particle columns are set through particles().
+  void restore_clock(long step, double time);
+
+ private:
+  template <class B, class M, class F>
+  void step_with(const B& basis, const M& material, const F& body, double dt);
+  template <class B>
+  void solve_consistent(const B& basis, std::array<std::vector<double>, Dim>& x,
+                        const std::array<std::vector<double>, Dim>& rhs);
+  void clear_grid(bool mass, bool momentum, bool force);
+  void check_mass();
+  void check_momentum();
+  void apply_fixed(std::array<std::vector<double>, Dim>& field);
+  void raise_unstable(std::size_t particle, const char* stage) const;
+
+  Scene scene_;
+  std::unique_ptr<Problem<Dim>> problem_;
+  Material material_;
+  AnyBasis<Dim> basis_;
+  ParticleStore<Dim> store_;
+  GridState<Dim> grid_;
+  CellBins<Dim> bins_;
+  std::vector<std::string> pipeline_;
+  Conservation conservation_;
+  double particle_mass_ = 0.0;
+  double empty_mass_ = 0.0;  ///< nodal mass at or below which a DOF counts as empty
+  double dt_ = 0.0, time_ = 0.0;
+  long step_ = 0, steps_total_ = 0;
+  int cg_iterations_ = 0;
+  std::array<std::vector<double>, Dim> cg_r_, cg_z_, cg_p_, cg_Ap_, cg_x_;
+};
+
+extern template class Simulation<1>;
+extern template class Simulation<2>;
+
+}  // namespace mpm

@@ -1,0 +1,149 @@
+#pragma once
+// Particle ↔ grid transfers of direct mapping (particles as integration points), thesis Algorithms 1 and 2.
+// Each kernel works on a range of particles; the caller decides the parallel schedule (coloured blocks for the
+// scatter, plain ranges for the gather). Compile-time flags select which sums a pass computes, so a scheme's
+// passes are the paper's steps and nothing more.
+#include <array>
+#include <cmath>
+#include <cstddef>
+
+#include "kernels/stencil.hpp"
+#include "kernels/views.hpp"
+
+namespace mpm {
+
+/// Which grid sums one P2G pass accumulates.
+struct ScatterFields {
+  bool mass;      ///< m_i = Σ_p φ_i(x_p) m_p                         (eq. 2.31 lumped)
+  bool momentum;  ///< q_i = Σ_p φ_i(x_p) m_p v_p                      (eqs 2.32, 2.48)
+  bool force;     ///< f_i = Σ_p (−∇φ_i·σ_p V_p + φ_i m_p b_p)        (eqs 2.33, 2.45; sign of the weak form 2.16)
+};
+
+/// Which particle updates one G2P pass performs.
+struct GatherFields {
+  bool velocity;     ///< v_p += Δt Σ_i φ_i a_i                       (eqs 2.39, 2.47)
+  bool position;     ///< x_p += Δt Σ_i φ_i v_i                       (eqs 2.38, 2.51)
+  bool deformation;  ///< F_p ← (I + Δt Σ_i v_i ⊗ ∇φ_i) F_p, then σ_p (eqs 2.40–2.41, 2.52–2.53)
+};
+
+/// Body force per unit mass: none.
+struct NoBodyForce {
+  static constexpr bool active = false;
+  template <int Dim>
+  std::array<double, Dim> at(std::size_t) const { return {}; }
+};
+
+template <int Dim>
+inline double det(const ParticleView<Dim>& p, std::size_t i) {
+  if constexpr (Dim == 1) return p.F[0][i];
+  else return p.F[0][i] * p.F[3][i] - p.F[1][i] * p.F[2][i];
+}
+
+/// P2G over particles order[begin..end): adds the selected sums into the grid. `totals` (if not null) receives
+/// Σ m_p v_p and Σ m_p |v_p| of these particles, for the conservation check.
+template <ScatterFields Fields, int Dim, int S, class Axis, class Body>
+inline void scatter_p2g(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p, const GridView<Dim>& g,
+                        const unsigned* order, std::size_t begin, std::size_t end, const Body& body) {
+  for (std::size_t k = begin; k < end; ++k) {
+    const std::size_t ip = order[k];
+    double xp[Dim];
+    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
+    const auto st = stencil_at<Dim, S>(basis, xp);
+    const double mp = p.m[ip];
+    double mv[Dim] = {};
+    if constexpr (Fields.momentum)
+      for (int d = 0; d < Dim; ++d) mv[d] = mp * p.v[d][ip];
+    double Vsig[Dim][Dim] = {};  // V_p σ_p
+    double mb[Dim] = {};         // m_p b_p
+    if constexpr (Fields.force) {
+      const double V = det(p, ip) * p.V0[ip];  // eq. 2.42
+      for (int a = 0; a < Dim; ++a)
+        for (int b = 0; b < Dim; ++b) Vsig[a][b] = V * p.s[sym_index<Dim>(a, b)][ip];
+      if constexpr (Body::active) {
+        const auto b = body.template at<Dim>(ip);
+        for (int d = 0; d < Dim; ++d) mb[d] = mp * b[d];
+      }
+    }
+    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>& dw) {
+      if constexpr (Fields.mass) g.m[i] += w * mp;
+      if constexpr (Fields.momentum)
+        for (int d = 0; d < Dim; ++d) g.q[d][i] += w * mv[d];
+      if constexpr (Fields.force)
+        for (int d = 0; d < Dim; ++d) {
+          double fi = w * mb[d];
+          for (int l = 0; l < Dim; ++l) fi -= dw[l] * Vsig[l][d];
+          g.f[d][i] += fi;
+        }
+    });
+  }
+}
+
+/// G2P over particles [begin, end): the selected updates; `stress(F, s)` is the constitutive law (σ from F).
+template <GatherFields Fields, int Dim, int S, class Axis, class Stress>
+inline void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p, const GridView<Dim>& g,
+                       std::size_t begin, std::size_t end, double dt, const Stress& stress, ParticleGuard& guard) {
+  for (std::size_t ip = begin; ip < end; ++ip) {
+    double xp[Dim];
+    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
+    const auto st = stencil_at<Dim, S>(basis, xp);
+    double ap[Dim] = {}, vp[Dim] = {}, L[Dim][Dim] = {};
+    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>& dw) {
+      for (int d = 0; d < Dim; ++d) {
+        if constexpr (Fields.velocity) ap[d] += w * g.a[d][i];
+        if constexpr (Fields.position || Fields.deformation) {
+          const double vi = g.v[d][i];
+          if constexpr (Fields.position) vp[d] += w * vi;
+          if constexpr (Fields.deformation)
+            for (int l = 0; l < Dim; ++l) L[d][l] += vi * dw[l];  // ∇v_p = Σ v_i ⊗ ∇φ_i
+        }
+      }
+    });
+    if constexpr (Fields.velocity)
+      for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * ap[d];
+    if constexpr (Fields.position)
+      for (int d = 0; d < Dim; ++d) p.x[d][ip] += dt * vp[d];
+    if constexpr (Fields.deformation) {
+      double F[Dim * Dim], Fn[Dim * Dim];
+      for (int c = 0; c < Dim * Dim; ++c) F[c] = p.F[c][ip];
+      for (int a = 0; a < Dim; ++a)
+        for (int b = 0; b < Dim; ++b) {
+          double sum = F[a * Dim + b];
+          for (int c = 0; c < Dim; ++c) sum += dt * L[a][c] * F[c * Dim + b];
+          Fn[a * Dim + b] = sum;
+        }
+      for (int c = 0; c < Dim * Dim; ++c) p.F[c][ip] = Fn[c];
+      double s[sym_components<Dim>];
+      stress(Fn, s);
+      for (int c = 0; c < sym_components<Dim>; ++c) p.s[c][ip] = s[c];
+      const double J = Dim == 1 ? Fn[0] : Fn[0] * Fn[3] - Fn[1] * Fn[2];
+      if (!(J > 0.0) || !std::isfinite(J + s[0])) guard.flag(ip);
+    }
+    if constexpr (Fields.position || Fields.velocity)
+      for (int d = 0; d < Dim; ++d)
+        if (!(p.x[d][ip] >= 0.0 && p.x[d][ip] <= guard.hi[d]) || !std::isfinite(p.v[d][ip])) guard.flag(ip);
+  }
+}
+
+/// y += M x for particles order[begin..end), with the consistent mass M_ij = Σ_p φ_i m_p φ_j (eq. 2.31), applied
+/// matrix-free: a gather of x to the particle followed by a scatter of m_p times it. Components are independent.
+template <int Dim, int S, class Axis>
+inline void apply_consistent_mass(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p, int stride1,
+                                  const std::array<const double*, Dim>& x, const std::array<double*, Dim>& y,
+                                  const unsigned* order, std::size_t begin, std::size_t end) {
+  for (std::size_t k = begin; k < end; ++k) {
+    const std::size_t ip = order[k];
+    double xp[Dim];
+    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
+    const auto st = stencil_at<Dim, S>(basis, xp);
+    double sp[Dim] = {};
+    for_each_node(st, stride1, [&](int i, double w, const std::array<double, Dim>&) {
+      for (int d = 0; d < Dim; ++d) sp[d] += w * x[d][i];
+    });
+    const double mp = p.m[ip];
+    for_each_node(st, stride1, [&](int i, double w, const std::array<double, Dim>&) {
+      for (int d = 0; d < Dim; ++d) y[d][i] += w * mp * sp[d];
+    });
+  }
+}
+
+}  // namespace mpm

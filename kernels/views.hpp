@@ -1,0 +1,57 @@
+#pragma once
+// Plain views of the particle columns and grid arrays a kernel reads or writes: pointers only, no ownership.
+// A pointer a scene does not need is null, and the kernels that would read it are not instantiated.
+#include <array>
+#include <atomic>
+#include <cstddef>
+#include <limits>
+
+namespace mpm {
+
+/// Number of independent Cauchy stress components stored per particle (symmetric tensor).
+template <int Dim>
+inline constexpr int sym_components = Dim * (Dim + 1) / 2;
+
+/// Index of σ_ab in the packed symmetric storage: 1D s00; 2D s00, s01, s11.
+template <int Dim>
+constexpr int sym_index(int a, int b) {
+  if constexpr (Dim == 1) return 0;
+  else return a == b ? (a == 0 ? 0 : 2) : 1;
+}
+
+template <int Dim>
+struct ParticleView {
+  std::array<double*, Dim> x{};               ///< current position
+  std::array<const double*, Dim> X{};         ///< reference position (only with body force or exact solution)
+  std::array<double*, Dim> v{};               ///< velocity
+  std::array<double*, Dim * Dim> F{};         ///< deformation gradient, row-major F_ab
+  std::array<double*, sym_components<Dim>> s{};  ///< Cauchy stress, packed symmetric
+  const double* m = nullptr;                  ///< mass (constant)
+  const double* V0 = nullptr;                 ///< initial volume
+};
+
+template <int Dim>
+struct GridView {
+  int stride1 = 0;  ///< number of functions along axis 0
+  int dofs = 0;
+  double* m = nullptr;                 ///< lumped (row-sum) mass
+  std::array<double*, Dim> q{};        ///< momentum
+  std::array<double*, Dim> f{};        ///< force
+  std::array<double*, Dim> v{};        ///< velocity
+  std::array<double*, Dim> a{};        ///< acceleration
+};
+
+/// Records the first particle (lowest index) whose state became invalid inside a kernel: non-finite values,
+/// J ≤ 0, or a position outside the grid. Flagging is rare, so a compare-and-swap loop costs nothing in practice.
+struct ParticleGuard {
+  static constexpr std::size_t none = std::numeric_limits<std::size_t>::max();
+  std::array<double, 3> hi{};  ///< the grid is [0, hi] per axis
+  std::atomic<std::size_t> first_bad{none};
+  void flag(std::size_t p) {
+    std::size_t cur = first_bad.load(std::memory_order_relaxed);
+    while (p < cur && !first_bad.compare_exchange_weak(cur, p, std::memory_order_relaxed)) {
+    }
+  }
+};
+
+}  // namespace mpm

@@ -1,0 +1,265 @@
+// Run file output: everything written is read back bitwise by name; the .partial/rename protocol, the XDMF
+// sidecar, resume by append(), and the error messages.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "engine/output_h5.hpp"
+
+namespace fs = std::filesystem;
+using mpm::ColumnView;
+using mpm::H5Writer;
+using mpm::OutputError;
+
+namespace {
+
+/// A fresh directory, removed with everything in it at the end of the test.
+struct TempDir {
+  fs::path dir;
+  TempDir() {
+    std::string tmpl = (fs::temp_directory_path() / "mpm-output-h5-XXXXXX").string();
+    REQUIRE(mkdtemp(tmpl.data()) != nullptr);
+    dir = tmpl;
+  }
+  ~TempDir() {
+    std::error_code ec;
+    fs::remove_all(dir, ec);
+  }
+  std::string file(const std::string& name) const { return (dir / name).string(); }
+};
+
+/// Equal bit for bit (so -0.0, NaN payloads and denormals count).
+bool same_bits(const std::vector<double>& a, const std::vector<double>& b) {
+  return a.size() == b.size() && (a.empty() || std::memcmp(a.data(), b.data(), a.size() * sizeof(double)) == 0);
+}
+
+std::string slurp(const std::string& path) {
+  std::ifstream in(path);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+std::size_t count(const std::string& text, const std::string& what) {
+  std::size_t n = 0;
+  for (auto p = text.find(what); p != std::string::npos; p = text.find(what, p + 1)) ++n;
+  return n;
+}
+
+const std::string kScene = R"({"dimension": 2, "grid": {"length": [1.0, 1.0], "cells": [4, 4]}, "note": "ü <&>"})";
+
+}  // namespace
+
+TEST_CASE("H5Writer writes a run file that reads back bitwise by name", "[output]") {
+  TempDir tmp;
+  const std::string path = tmp.file("run.h5");
+  const std::vector<std::string> names{"t", "mass", "momentum_x"};
+  const std::vector<std::vector<double>> rows{{0.0, 1.0, 0.0}, {0.1, 1.0, 1e-17}, {0.2, 1.0 - 1e-16, -2.5}};
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::vector<double> x0{0.125, -0.0, 1e-310, std::numeric_limits<double>::max(), nan};
+  const std::vector<double> x1{0.1, 0.2, 0.3, 0.4, 0.5};
+  const std::vector<double> v0{1.0 / 3.0, -2.0, 0.0, 5e-324, 7.0};
+  const std::vector<double> big_x0{0.5, 0.75}, big_x1{0.25, 0.5};
+  const std::vector<double> empty;
+  const std::vector<double> ck1{1, 2, 3, 4, 5}, ck2{9, 8, 7, 6};
+
+  {
+    H5Writer w(path, kScene, 2);
+    CHECK(w.path() == path);
+    CHECK(fs::exists(path + ".partial"));
+    w.set_metric_names(names);
+    for (const auto& r : rows) w.add_metrics(r);
+
+    const std::vector<ColumnView> s0{{"x0", x0}, {"x1", x1}, {"v0", v0}};
+    w.write_snapshot(0, 0.0, s0);
+    const std::vector<ColumnView> s10{{"x0", empty}, {"x1", empty}, {"m", empty}};  // no particles
+    w.write_snapshot(10, 0.1, s10);
+    const std::vector<ColumnView> s_big{{"x0", big_x0}, {"x1", big_x1}};  // a step with 7 digits
+    w.write_snapshot(1234567, 12.5, s_big);
+
+    const std::vector<ColumnView> c1{{"x0", ck1}};
+    const std::vector<std::pair<std::string, double>> sc1{{"dt", 1e-5}, {"energy0", 3.0}};
+    w.write_checkpoint(5, 0.05, c1, sc1);
+    const std::vector<ColumnView> c2{{"x0", ck2}, {"v0", empty}};
+    const std::vector<std::pair<std::string, double>> sc2{{"dt", 2e-5}};
+    w.write_checkpoint(10, 0.1, c2, sc2);
+
+    w.set_attribute("status", "ok");
+    w.close();
+    w.close();  // idempotent
+  }
+
+  SECTION("the final file replaces the temporary one, and the sidecar exists") {
+    CHECK(fs::exists(path));
+    CHECK_FALSE(fs::exists(path + ".partial"));
+    CHECK(mpm::xdmf_path(path) == tmp.file("run.xdmf"));
+    CHECK(fs::exists(tmp.file("run.xdmf")));
+    CHECK_FALSE(fs::exists(tmp.file("run.xdmf.partial")));
+  }
+
+  SECTION("scene and root attributes") {
+    CHECK(mpm::read_scene_attribute(path) == nlohmann::json::parse(kScene));
+    CHECK(mpm::read_string_attribute(path, "/", "scene") == std::vector<std::string>{kScene});
+    CHECK(mpm::read_string_attribute(path, "/", "status") == std::vector<std::string>{"ok"});
+    CHECK(mpm::read_number_attribute(path, "/", "dimension") == 2);
+  }
+
+  SECTION("metrics table") {
+    CHECK(mpm::read_string_attribute(path, "/metrics", "columns") == names);
+    std::vector<double> flat;
+    for (const auto& r : rows) flat.insert(flat.end(), r.begin(), r.end());
+    CHECK(same_bits(mpm::read_dataset(path, "/metrics"), flat));
+  }
+
+  SECTION("snapshots") {
+    CHECK(mpm::list_snapshots(path) == std::vector<std::string>{"000000", "000010", "1234567"});
+    CHECK(mpm::list_datasets(path, "/snapshots/000000") == std::vector<std::string>{"v0", "x0", "x1"});
+    CHECK(same_bits(mpm::read_dataset(path, "/snapshots/000000/x0"), x0));
+    CHECK(same_bits(mpm::read_dataset(path, "/snapshots/000000/x1"), x1));
+    CHECK(same_bits(mpm::read_dataset(path, "/snapshots/000000/v0"), v0));
+    CHECK(mpm::read_dataset(path, "/snapshots/000010/x0").empty());
+    CHECK(mpm::read_dataset(path, "/snapshots/000010/m").empty());
+    CHECK(same_bits(mpm::read_dataset(path, "/snapshots/1234567/x0"), big_x0));
+    CHECK(same_bits(mpm::read_dataset(path, "/snapshots/1234567/x1"), big_x1));
+    CHECK(mpm::read_number_attribute(path, "/snapshots/000010", "step") == 10);
+    CHECK(mpm::read_number_attribute(path, "/snapshots/000010", "time") == 0.1);
+    CHECK(mpm::read_number_attribute(path, "/snapshots/1234567", "time") == 12.5);
+  }
+
+  SECTION("the second checkpoint replaced the first") {
+    CHECK(mpm::list_datasets(path, "/checkpoint") == std::vector<std::string>{"v0", "x0"});
+    CHECK(same_bits(mpm::read_dataset(path, "/checkpoint/x0"), ck2));
+    CHECK(mpm::read_dataset(path, "/checkpoint/v0").empty());
+    CHECK(mpm::read_number_attribute(path, "/checkpoint", "step") == 10);
+    CHECK(mpm::read_number_attribute(path, "/checkpoint", "time") == 0.1);
+    CHECK(mpm::read_number_attribute(path, "/checkpoint", "dt") == 2e-5);
+    CHECK_THROWS_AS(mpm::read_number_attribute(path, "/checkpoint", "energy0"), OutputError);
+    CHECK_THROWS_AS(mpm::read_dataset(path, "/checkpoint.new/x0"), OutputError);
+  }
+
+  SECTION("the XDMF sidecar mentions every snapshot by its relative reference") {
+    const std::string x = slurp(tmp.file("run.xdmf"));
+    CHECK(x.find("<Xdmf Version=\"3.0\">") != std::string::npos);
+    CHECK(x.find("CollectionType=\"Temporal\"") != std::string::npos);
+    CHECK(count(x, "<Time Value=") == 2);
+    CHECK(x.find("<Grid Name=\"000000\"") != std::string::npos);
+    CHECK(x.find("<Grid Name=\"1234567\"") != std::string::npos);
+    // XDMF readers fail on a grid without points, so the empty snapshot is only named in a comment
+    CHECK(x.find("<!-- snapshot 000010 at t = 0.1 has no particles -->") != std::string::npos);
+    CHECK(x.find("<Time Value=\"12.5\"/>") != std::string::npos);
+    CHECK(x.find(">run.h5:/snapshots/000000/x0<") != std::string::npos);
+    CHECK(x.find(">run.h5:/snapshots/000000/x1<") != std::string::npos);
+    CHECK(x.find(">run.h5:/snapshots/1234567/x1<") != std::string::npos);
+    CHECK(x.find("<Attribute Name=\"v0\"") != std::string::npos);
+    CHECK(x.find("GeometryType=\"X_Y\"") != std::string::npos);
+    CHECK(x.find("TopologyType=\"Polyvertex\" NumberOfElements=\"5\"") != std::string::npos);
+    CHECK(x.find("ItemType=\"HyperSlab\"") != std::string::npos);  // 2 of the 5 connectivity ids
+    CHECK(x.find(tmp.dir.string()) == std::string::npos);
+    // connectivity of the largest snapshot
+    CHECK(mpm::read_dataset(path, "/xdmf/ids") == std::vector<double>{0, 1, 2, 3, 4});
+  }
+}
+
+TEST_CASE("A 1D writer destroyed without close() still produces the final file", "[output]") {
+  TempDir tmp;
+  const std::string path = tmp.file("bar.h5");
+  const std::vector<double> x0{0.25, 0.5, 0.75}, v0{0.1, -0.2, 0.3};
+  {
+    H5Writer w(path, R"({"dimension": 1})", 1);
+    w.set_metric_names({"t", "energy"});
+    w.add_metrics(std::vector<double>{0.0, 1.5});
+    w.add_metrics(std::vector<double>{0.5, 1.25});
+    const std::vector<ColumnView> cols{{"x0", x0}, {"v0", v0}};
+    w.write_snapshot(3, 0.5, cols);
+    CHECK_FALSE(fs::exists(path));
+  }
+  CHECK(fs::exists(path));
+  CHECK_FALSE(fs::exists(path + ".partial"));
+  CHECK(same_bits(mpm::read_dataset(path, "/metrics"), {0.0, 1.5, 0.5, 1.25}));
+  CHECK(same_bits(mpm::read_dataset(path, "/snapshots/000003/v0"), v0));
+  CHECK(mpm::read_dataset(path, "/xdmf/zeros") == std::vector<double>{0, 0, 0});
+  const std::string x = slurp(tmp.file("bar.xdmf"));
+  CHECK(x.find(">bar.h5:/snapshots/000003/x0<") != std::string::npos);
+  CHECK(x.find(">bar.h5:/xdmf/zeros<") != std::string::npos);  // the y coordinate ParaView needs
+  CHECK(x.find("<Attribute Name=\"v0\"") != std::string::npos);
+}
+
+TEST_CASE("append() continues a run after its checkpoint", "[output]") {
+  TempDir tmp;
+  const std::string path = tmp.file("resume.h5");
+  const std::vector<double> a{1, 2}, b{3, 4}, c{5, 6, 7, 8, 9}, c_new{7, 8};  // c: particles added, later undone
+  {
+    H5Writer w(path, kScene, 2);
+    w.set_metric_names({"t", "mass"});
+    for (double t : {0.0, 0.1, 0.2}) w.add_metrics(std::vector<double>{t, 1.0});
+    const std::vector<ColumnView> s0{{"x0", a}}, s1{{"x0", b}}, s2{{"x0", c}};
+    w.write_snapshot(0, 0.0, s0);
+    w.write_snapshot(10, 0.1, s1);
+    const std::vector<std::pair<std::string, double>> none;
+    w.write_checkpoint(10, 0.1, s1, none);
+    w.write_snapshot(20, 0.2, s2);
+  }  // closed by the destructor
+  {
+    H5Writer w = H5Writer::append(path);
+    CHECK(fs::exists(path));  // untouched until close
+    CHECK(fs::exists(path + ".partial"));
+    w.set_metric_names({"t", "mass"});  // same names: accepted
+    CHECK_THROWS_AS(w.set_metric_names({"t"}), OutputError);
+    CHECK(mpm::read_number_attribute(path, "/checkpoint", "step") == 10);
+    w.discard_after(10, 0.1);
+    w.add_metrics(std::vector<double>{0.2, 2.0});
+    const std::vector<ColumnView> s2{{"x0", c_new}};
+    w.write_snapshot(20, 0.2, s2);
+    w.close();
+  }
+  CHECK_FALSE(fs::exists(path + ".partial"));
+  CHECK(mpm::read_scene_attribute(path) == nlohmann::json::parse(kScene));
+  CHECK(same_bits(mpm::read_dataset(path, "/metrics"), {0.0, 1.0, 0.1, 1.0, 0.2, 2.0}));
+  CHECK(mpm::list_snapshots(path) == std::vector<std::string>{"000000", "000010", "000020"});
+  CHECK(same_bits(mpm::read_dataset(path, "/snapshots/000020/x0"), c_new));
+  const std::string x = slurp(tmp.file("resume.xdmf"));
+  CHECK(count(x, "<Time Value=") == 3);
+  // the connectivity helper kept its 5 ids from the first run; the 2-particle grids take a slab of it
+  CHECK(x.find("Dimensions=\"5\" NumberType=\"Int\" Precision=\"8\" Format=\"HDF\">resume.h5:/xdmf/ids<") !=
+        std::string::npos);
+  CHECK_THROWS_AS(H5Writer::append(tmp.file("missing.h5")), OutputError);
+}
+
+TEST_CASE("Output errors are OutputError naming the file", "[output]") {
+  TempDir tmp;
+  const std::string bad = tmp.file("no/such/dir/run.h5");
+  CHECK_THROWS_AS(H5Writer(bad, "{}", 2), OutputError);
+  CHECK_THROWS_WITH(H5Writer(bad, "{}", 2), Catch::Contains(bad) && Catch::Contains("H5Fcreate"));
+  CHECK_FALSE(fs::exists(bad));
+
+  const std::string missing = tmp.file("missing.h5");
+  CHECK_THROWS_WITH(mpm::read_scene_attribute(missing), Catch::Contains(missing));
+  CHECK_THROWS_WITH(mpm::list_snapshots(missing), Catch::Contains(missing));
+
+  const std::string path = tmp.file("misuse.h5");
+  H5Writer w(path, "{}", 2);
+  CHECK_THROWS_AS(w.add_metrics(std::vector<double>{1.0}), OutputError);  // before set_metric_names
+  w.set_metric_names({"t", "mass"});
+  CHECK_THROWS_AS(w.add_metrics(std::vector<double>{1.0}), OutputError);  // wrong row size
+  const std::vector<double> two{1, 2}, three{1, 2, 3};
+  const std::vector<ColumnView> ragged{{"x0", two}, {"x1", three}}, slash{{"a/b", two}};
+  const std::vector<ColumnView> twice{{"x0", two}, {"x0", two}};
+  CHECK_THROWS_AS(w.write_snapshot(1, 0.0, ragged), OutputError);
+  CHECK_THROWS_AS(w.write_snapshot(1, 0.0, slash), OutputError);
+  CHECK_THROWS_AS(w.write_snapshot(1, 0.0, twice), OutputError);
+  CHECK_THROWS_AS(w.write_snapshot(-1, 0.0, {}), OutputError);
+  const std::vector<std::pair<std::string, double>> reserved{{"step", 1.0}};
+  CHECK_THROWS_AS(w.write_checkpoint(1, 0.0, {}, reserved), OutputError);
+  w.close();
+  CHECK_THROWS_AS(w.write_snapshot(2, 0.0, {}), OutputError);  // after close
+  CHECK_THROWS_WITH(mpm::read_dataset(path, "/nothing"), Catch::Contains(path) && Catch::Contains("/nothing"));
+  CHECK(mpm::list_snapshots(path).empty());
+}
