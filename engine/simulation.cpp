@@ -21,16 +21,35 @@ constexpr int reorder_every = 16;              // steps between permutations of 
 constexpr double cg_tolerance = 1e-14;         // relative residual of the consistent-mass solves
 constexpr int cg_max_iterations = 1000;
 
-/// Deterministic parallel sum of f(i) over [0, n): fixed chunks, fixed combination order.
+/// A sum with its rounding error carried along (Neumaier): totals of many nearly equal terms, like particle
+/// masses, would otherwise drift by O(n ε) and hide the P2G round-off that the conservation check measures.
+struct CompensatedSum {
+  double sum = 0.0, error = 0.0;
+  void add(double x) {
+    const double t = sum + x;
+    error += std::abs(sum) >= std::abs(x) ? (sum - t) + x : (x - t) + sum;
+    sum = t;
+  }
+  CompensatedSum operator+(const CompensatedSum& o) const {
+    CompensatedSum r = *this;
+    r.add(o.sum);
+    r.error += o.error;
+    return r;
+  }
+  double value() const { return sum + error; }
+};
+
+/// Deterministic parallel sum of f(i) over [0, n): fixed chunks, fixed combination order, compensated.
 template <class F>
 double deterministic_sum(std::size_t n, F&& f) {
   return tbb::parallel_deterministic_reduce(
-      tbb::blocked_range<std::size_t>(0, n, 4096), 0.0,
-      [&](const tbb::blocked_range<std::size_t>& r, double acc) {
-        for (std::size_t i = r.begin(); i < r.end(); ++i) acc += f(i);
-        return acc;
-      },
-      std::plus<>());
+             tbb::blocked_range<std::size_t>(0, n, 4096), CompensatedSum{},
+             [&](const tbb::blocked_range<std::size_t>& r, CompensatedSum acc) {
+               for (std::size_t i = r.begin(); i < r.end(); ++i) acc.add(f(i));
+               return acc;
+             },
+             std::plus<>())
+      .value();
 }
 
 template <class F>
@@ -262,8 +281,8 @@ Simulation<Dim>::Simulation(const Scene& scene)
     for (int a = 0; a < Dim; ++a) pv.F[a * Dim + a][p] = 1.0;
     store_.column(Field::mass)[p] = seeds.m[p];
     store_.column(Field::volume0)[p] = seeds.V0[p];
-    particle_mass_ += seeds.m[p];
   }
+  particle_mass_ = deterministic_sum(n, [&](std::size_t p) { return seeds.m[p]; });
   empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
 
   grid_.stride1 = scene.grid.cells[0] + degree_of(scene.grid.basis);

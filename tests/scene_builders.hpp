@@ -1,0 +1,46 @@
+#pragma once
+// Scenes of the verification problems, built in code so each test states the settings it depends on.
+#include <cmath>
+#include <string>
+
+#include <nlohmann/json.hpp>
+
+#include "engine/scene.hpp"
+#include "engine/simulation.hpp"
+
+namespace mpm::test {
+
+/// Vibrating bar, small deformation without grid crossing (thesis Table 5.2).
+inline nlohmann::json bar_scene(int cells, const std::string& basis, const std::string& mass,
+                                const std::string& update = "musl") {
+  return {{"dimension", 1},
+          {"problem", {{"name", "vibrating-bar"}, {"v0", 0.28}}},
+          {"grid", {{"length", {1.0}}, {"cells", {cells}}, {"basis", basis}}},
+          {"particles", {{"per_cell", {12}}}},
+          {"material", {{"model", "linear-elastic"}, {"E", 7e6}, {"nu", 0.0}, {"density", 2000.0}}},
+          {"algorithm", {{"update", update}, {"mass", mass}}},
+          {"time", {{"dt", 1e-7}, {"end", 1.9e-6}}}};
+}
+
+/// Vibrating plate, manufactured solution; T = 0.0125 s, where every exact field is non-zero.
+inline nlohmann::json plate_scene(int cells, double amplitude = 0.05, const std::string& update = "musl",
+                                  const std::string& mass = "lumped") {
+  return {{"dimension", 2},
+          {"problem", {{"name", "vibrating-plate"}, {"amplitude", amplitude}}},
+          {"grid", {{"length", {1.0, 1.0}}, {"cells", {cells, cells}}, {"basis", "bspline2"}}},
+          {"particles", {{"per_cell", {3, 3}}}},
+          {"algorithm", {{"update", update}, {"mass", mass}}},
+          {"time", {{"dt", 1e-5}, {"end", 0.0125}}}};
+}
+
+template <int Dim>
+void run_to_end(Simulation<Dim>& sim) {
+  while (!sim.finished()) sim.step();
+}
+
+/// Observed order of convergence between two resolutions (cell size halved: ratio 2).
+inline double order(double coarse_error, double fine_error, double ratio = 2.0) {
+  return std::log(coarse_error / fine_error) / std::log(ratio);
+}
+
+}  // namespace mpm::test
