@@ -1,0 +1,130 @@
+// Whole time step, Simulation<Dim>::step(), on the headline scene: one neo-Hookean body filling the grid with a
+// uniform velocity, all sides fixed, no problem, no body force; direct mapping, lumped mass, quadratic B-splines on
+// the fast path; 4 particles per cell (2D: 2x2, 1D: 4). Arguments: nominal particle count and TBB threads.
+//
+//   step/<dim>d/<scheme>/n:<N>/threads:<T>
+//
+// Counter particle_steps_per_s = particles x steps / wall time. Set-up (scene parsing, seeding, the first-touch
+// of every array) is outside the timed loop. A Simulation is reused by consecutive benchmarks with the same
+// dimension, size and scheme (the thread counts and repetitions of one size), since seeding 1e7 particles costs
+// seconds. The engine reorders the particles every 16 steps, so every timed run is a whole number of 16-step
+// periods starting at a reorder step, and so includes the reordering at its true frequency.
+#include <cmath>
+#include <memory>
+#include <string>
+
+#include <benchmark/benchmark.h>
+#include <nlohmann/json.hpp>
+
+#include "bench/bench_util.hpp"
+#include "engine/scene.hpp"
+#include "engine/simulation.hpp"
+
+namespace {
+
+constexpr long kPeriod = 16;  // engine/simulation.cpp: reorder_every
+
+/// The headline scene; `n` nominal particles, 4 per cell.
+nlohmann::json scene_json(int dim, std::int64_t n, const std::string& scheme) {
+  nlohmann::json material{{"model", "neo-hookean"}, {"E", 1e6}, {"nu", 0.3}, {"density", 1000}};
+  nlohmann::json j;
+  if (dim == 2) {
+    const int cells = mpm_bench::cells_for_2d(n);
+    j = {{"dimension", 2},
+         {"grid", {{"length", {1, 1}}, {"cells", {cells, cells}}, {"basis", "bspline2"}, {"basis_path", "fast"}}},
+         {"particles", {{"per_cell", {2, 2}}}},
+         {"bodies", {{{"box", {{0, 0}, {1, 1}}}, {"velocity", {0.1, 0.05}}}}},
+         {"fixed", {"x-", "x+", "y-", "y+"}}};
+  } else {
+    const int cells = std::max<int>(1, static_cast<int>(n / 4));
+    j = {{"dimension", 1},
+         {"grid", {{"length", {1}}, {"cells", {cells}}, {"basis", "bspline2"}, {"basis_path", "fast"}}},
+         {"particles", {{"per_cell", {4}}}},
+         {"bodies", {{{"box", {{0}, {1}}}, {"velocity", {0.1}}}}},
+         {"fixed", {"x-", "x+"}}};
+  }
+  j["material"] = material;
+  j["algorithm"] = {{"update", scheme}, {"mass", "lumped"}, {"mapping", "direct"}};
+  j["time"] = {{"cfl", 0.2}, {"end", 1000.0}};  // never reached within a benchmark
+  return j;
+}
+
+/// Timed steps per run: a multiple of the reorder period, about `budget` particle-steps, at least one period.
+long timed_steps(std::size_t particles) {
+  constexpr double budget = 2.0e7;
+  const long periods = std::max(1L, std::lround(budget / (static_cast<double>(particles) * kPeriod)));
+  return std::min(periods, 256L) * kPeriod;
+}
+
+template <int Dim>
+struct Cache {
+  std::string key;
+  std::unique_ptr<mpm::Simulation<Dim>> sim;
+};
+
+template <int Dim>
+mpm::Simulation<Dim>& simulation(std::int64_t n, const std::string& scheme) {
+  static Cache<Dim> cache;
+  const std::string key = std::to_string(n) + "/" + scheme;
+  if (cache.key != key || !cache.sim) {
+    cache.sim.reset();  // free the previous one first: 1e7 particles are ~1.3 GB
+    cache.sim = std::make_unique<mpm::Simulation<Dim>>(mpm::parse_scene(scene_json(Dim, n, scheme)));
+    cache.key = key;
+  }
+  return *cache.sim;
+}
+
+template <int Dim>
+void BM_Step(benchmark::State& state, const std::string& scheme) {
+  const std::int64_t nominal = state.range(0);
+  const int threads = static_cast<int>(state.range(1));
+  auto gc = mpm_bench::limit_threads(threads);
+  try {
+    auto& sim = simulation<Dim>(nominal, scheme);
+    const std::size_t np = sim.particles().size();
+    // untimed: finish the current reorder period (a fresh Simulation runs one warm-up period, which touches
+    // the binning arrays the first time), so the timed run starts with a reordering step
+    if (sim.steps_done() == 0) sim.step();
+    while (sim.steps_done() % kPeriod != 0) sim.step();
+    const long steps = timed_steps(np);
+    if (state.max_iterations != static_cast<benchmark::IterationCount>(steps)) {
+      state.SkipWithError("registered iteration count differs from timed_steps()");
+      return;
+    }
+    for (auto _ : state) sim.step();
+    state.counters["particles"] = static_cast<double>(np);
+    state.counters["particle_steps_per_s"] =
+        benchmark::Counter(static_cast<double>(np) * static_cast<double>(state.iterations()), benchmark::Counter::kIsRate);
+    state.counters["dt"] = sim.dt();
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+  }
+}
+
+std::size_t particles_of(int dim, std::int64_t nominal) {
+  if (dim == 2) {
+    const std::size_t c = mpm_bench::cells_for_2d(nominal);
+    return 4 * c * c;
+  }
+  return 4 * static_cast<std::size_t>(std::max<std::int64_t>(1, nominal / 4));
+}
+
+const bool registered = [] {
+  const std::int64_t sizes[] = {1'000, 10'000, 100'000, 1'000'000, 10'000'000};
+  for (int dim : {1, 2})
+    for (const char* scheme : {"usl", "musl"})
+      for (std::int64_t n : sizes) {
+        const std::string name = "step/" + std::to_string(dim) + "d/" + scheme;
+        auto fn = dim == 1 ? BM_Step<1> : BM_Step<2>;
+        benchmark::RegisterBenchmark(name.c_str(), fn, std::string(scheme))
+            ->Args({n, 1})
+            ->Args({n, 2})
+            ->ArgNames({"n", "threads"})
+            ->Iterations(timed_steps(particles_of(dim, n)))
+            ->UseRealTime()
+            ->Unit(benchmark::kMillisecond);
+      }
+  return true;
+}();
+
+}  // namespace

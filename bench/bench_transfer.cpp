@@ -1,0 +1,332 @@
+// Particle ↔ grid transfers in 2D with the quadratic fast-path basis, on 2x2 particles per cell sorted into the
+// engine's block order.
+//
+// P2G of mass, momentum and force (the USL scatter, the heaviest one), four ways; each timed iteration produces
+// the finished grid from zero (clear + scatter [+ reduce]):
+//   p2g/serial      CellBins::for_each_block_serial + scatter_p2g (the engine's reference order), one thread
+//   p2g/coloured    CellBins::for_each_block_coloured + scatter_p2g: what the engine runs
+//   p2g/atomic      baseline: tbb::parallel_for over particles, every grid add a std::atomic_ref<double> fetch_add
+//   p2g/per_thread  baseline: tbb::enumerable_thread_specific grid per thread, scatter_p2g into it, then a
+//                   parallel sum of the copies into the grid (which also clears the copies for the next step)
+// The two baselines live here only (DESIGN.md: they justify the coloured scheme; they are not engine code).
+// Every variant is checked against the serial result before timing.
+//
+// G2P (gather_g2p) for the three gathers the schemes use, the stress update alone (neo-Hookean σ(F)), and the
+// per-step binning (CellBins::bin) and the every-16-steps permutation (ParticleStore::permute).
+#include <atomic>
+#include <memory>
+#include <vector>
+
+#include <benchmark/benchmark.h>
+#include <tbb/blocked_range.h>
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include "bench/bench_util.hpp"
+#include "engine/material.hpp"
+#include "kernels/transfer.hpp"
+
+namespace {
+
+using mpm_bench::Grid2D;
+using mpm_bench::ParticleSet2D;
+
+constexpr mpm::ScatterFields kAll{true, true, true};
+constexpr std::size_t kParticleGrain = 2048;  // as the engine's gathers
+constexpr std::size_t kGridGrain = 4096;      // as the engine's grid loops
+
+/// One particle set alive at a time (the largest is ~0.5 GB); reused by consecutive benchmarks of one size.
+ParticleSet2D& particle_set(std::int64_t nominal) {
+  static std::unique_ptr<ParticleSet2D> cached;
+  const int cells = mpm_bench::cells_for_2d(nominal);
+  if (!cached || cached->cells != cells) {
+    cached.reset();
+    cached = std::make_unique<ParticleSet2D>(cells);
+  }
+  return *cached;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+// Baseline 1: atomic adds. The loop body is scatter_p2g's (kernels/transfer.hpp) with every += made atomic.
+template <mpm::ScatterFields Fields, int Dim, int S, class Axis>
+void scatter_p2g_atomic(const mpm::TensorBasis<Dim, Axis>& basis, const mpm::ParticleView<Dim>& p,
+                        const mpm::GridView<Dim>& g, const unsigned* order, std::size_t begin, std::size_t end) {
+  const auto add = [](double& target, double value) {
+    std::atomic_ref<double>(target).fetch_add(value, std::memory_order_relaxed);
+  };
+  for (std::size_t k = begin; k < end; ++k) {
+    const std::size_t ip = order[k];
+    double xp[Dim];
+    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
+    const auto st = mpm::stencil_at<Dim, S>(basis, xp);
+    const double mp = p.m[ip];
+    double mv[Dim] = {};
+    if constexpr (Fields.momentum)
+      for (int d = 0; d < Dim; ++d) mv[d] = mp * p.v[d][ip];
+    double Vsig[Dim][Dim] = {};
+    if constexpr (Fields.force) {
+      const double V = mpm::det(p, ip) * p.V0[ip];
+      for (int a = 0; a < Dim; ++a)
+        for (int b = 0; b < Dim; ++b) Vsig[a][b] = V * p.s[mpm::sym_index<Dim>(a, b)][ip];
+    }
+    mpm::for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>& dw) {
+      if constexpr (Fields.mass) add(g.m[i], w * mp);
+      if constexpr (Fields.momentum)
+        for (int d = 0; d < Dim; ++d) add(g.q[d][i], w * mv[d]);
+      if constexpr (Fields.force)
+        for (int d = 0; d < Dim; ++d) {
+          double fi = 0.0;
+          for (int l = 0; l < Dim; ++l) fi -= dw[l] * Vsig[l][d];
+          add(g.f[d][i], fi);
+        }
+    });
+  }
+}
+
+// Baseline 2: per-thread grids of the arrays the scatter writes.
+struct LocalGrid {
+  std::vector<double> m, q0, q1, f0, f1;
+  explicit LocalGrid(int dofs) : m(dofs, 0.0), q0(dofs, 0.0), q1(dofs, 0.0), f0(dofs, 0.0), f1(dofs, 0.0) {}
+  mpm::GridView<2> view(int stride1) {
+    mpm::GridView<2> g;
+    g.stride1 = stride1;
+    g.dofs = static_cast<int>(m.size());
+    g.m = m.data();
+    g.q = {q0.data(), q1.data()};
+    g.f = {f0.data(), f1.data()};
+    return g;
+  }
+  std::array<std::vector<double>*, 5> arrays() { return {&m, &q0, &q1, &f0, &f1}; }
+};
+
+void clear_parallel(Grid2D& g) {
+  auto targets = g.scatter_targets();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.dofs, kGridGrain), [&](const auto& r) {
+    for (auto* a : targets) std::fill(a->begin() + r.begin(), a->begin() + r.end(), 0.0);
+  });
+}
+
+void p2g_serial(ParticleSet2D& ps, Grid2D& g) {
+  for (auto* a : g.scatter_targets()) std::fill(a->begin(), a->end(), 0.0);
+  const auto pv = ps.store.view();
+  const auto gv = g.view();
+  const unsigned* order = ps.bins.order().data();
+  ps.bins.for_each_block_serial([&](std::size_t b, std::size_t e) {
+    mpm::scatter_p2g<kAll, 2, 3>(ps.basis, pv, gv, order, b, e, mpm::NoBodyForce{});
+  });
+}
+
+void p2g_coloured(ParticleSet2D& ps, Grid2D& g) {
+  clear_parallel(g);
+  const auto pv = ps.store.view();
+  const auto gv = g.view();
+  const unsigned* order = ps.bins.order().data();
+  ps.bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
+    mpm::scatter_p2g<kAll, 2, 3>(ps.basis, pv, gv, order, b, e, mpm::NoBodyForce{});
+  });
+}
+
+void p2g_atomic(ParticleSet2D& ps, Grid2D& g) {
+  clear_parallel(g);
+  const auto pv = ps.store.view();
+  const auto gv = g.view();
+  const unsigned* order = ps.bins.order().data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ps.n, kParticleGrain), [&](const auto& r) {
+    scatter_p2g_atomic<kAll, 2, 3>(ps.basis, pv, gv, order, r.begin(), r.end());
+  });
+}
+
+void p2g_per_thread(ParticleSet2D& ps, Grid2D& g, tbb::enumerable_thread_specific<LocalGrid>& locals) {
+  const auto pv = ps.store.view();
+  const unsigned* order = ps.bins.order().data();
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ps.n, kParticleGrain), [&](const auto& r) {
+    const auto lv = locals.local().view(g.stride1);
+    mpm::scatter_p2g<kAll, 2, 3>(ps.basis, pv, lv, order, r.begin(), r.end(), mpm::NoBodyForce{});
+  });
+  std::vector<LocalGrid*> copies;
+  for (auto& l : locals) copies.push_back(&l);
+  auto targets = g.scatter_targets();
+  // sum the copies into the grid and zero them for the next step, one cache-sized chunk at a time
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.dofs, kGridGrain), [&](const auto& r) {
+    for (int k = 0; k < 5; ++k) {
+      double* out = targets[k]->data();
+      for (std::size_t c = 0; c < copies.size(); ++c) {
+        double* in = copies[c]->arrays()[k]->data();
+        if (c == 0)
+          for (std::size_t i = r.begin(); i < r.end(); ++i) out[i] = in[i];
+        else
+          for (std::size_t i = r.begin(); i < r.end(); ++i) out[i] += in[i];
+        std::fill(in + r.begin(), in + r.end(), 0.0);
+      }
+      if (copies.empty()) std::fill(out + r.begin(), out + r.end(), 0.0);
+    }
+  });
+}
+
+enum class P2G { serial, coloured, atomic, per_thread };
+
+void BM_P2G(benchmark::State& state, P2G variant) {
+  const std::int64_t nominal = state.range(0);
+  const int threads = static_cast<int>(state.range(1));
+  auto& ps = particle_set(nominal);
+  auto gc = mpm_bench::limit_threads(threads);
+  Grid2D reference(ps.functions()), g(ps.functions());
+  p2g_serial(ps, reference);
+  tbb::enumerable_thread_specific<LocalGrid> locals([&] { return LocalGrid(g.dofs); });
+  auto run = [&] {
+    switch (variant) {
+      case P2G::serial: p2g_serial(ps, g); break;
+      case P2G::coloured: p2g_coloured(ps, g); break;
+      case P2G::atomic: p2g_atomic(ps, g); break;
+      case P2G::per_thread: p2g_per_thread(ps, g, locals); break;
+    }
+  };
+  run();  // warm-up: first touch, per-thread copies allocated
+  double worst = 0.0;
+  for (int k = 0; k < 5; ++k) worst = std::max(worst, mpm_bench::max_rel_diff(*g.scatter_targets()[k], *reference.scatter_targets()[k]));
+  if (worst > 1e-12) {
+    state.SkipWithError("P2G result differs from the serial scatter");
+    return;
+  }
+  for (auto _ : state) {
+    run();
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * ps.n));
+  state.counters["particles"] = static_cast<double>(ps.n);
+  state.counters["rel_diff_vs_serial"] = worst;
+}
+
+// ---------------------------------------------------------------------------------------------------------------
+enum class G2P { usl, musl_velocity, musl_position_deformation };
+
+template <mpm::GatherFields Fields>
+void gather(ParticleSet2D& ps, Grid2D& g, double dt, const mpm::NeoHookean& law, mpm::ParticleGuard& guard) {
+  const auto pv = ps.store.view();
+  const auto gv = g.view();
+  const auto stress = [&](const double* F, double* s) { law.stress<2>(F, s); };
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ps.n, kParticleGrain), [&](const auto& r) {
+    mpm::gather_g2p<Fields, 2, 3>(ps.basis, pv, gv, r.begin(), r.end(), dt, stress, guard);
+  });
+}
+
+mpm::NeoHookean neo_hookean() {
+  mpm::MaterialSpec spec;
+  spec.model = mpm::MaterialModel::neo_hookean;
+  spec.E = 1e6;
+  spec.nu = 0.3;
+  return mpm::NeoHookean{mpm::Lame::from(spec)};
+}
+
+void BM_G2P(benchmark::State& state, G2P variant) {
+  const std::int64_t nominal = state.range(0);
+  auto& ps = particle_set(nominal);
+  auto gc = mpm_bench::limit_threads(static_cast<int>(state.range(1)));
+  Grid2D g(ps.functions());
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> u(-0.1, 0.1);
+  for (int d = 0; d < 2; ++d)
+    for (int i = 0; i < g.dofs; ++i) {
+      g.v[d][i] = u(rng);
+      g.a[d][i] = u(rng);
+    }
+  const auto law = neo_hookean();
+  mpm::ParticleGuard guard;
+  guard.hi = {1.0, 1.0, 0.0};
+  const double dt = 1e-9;  // particles and F barely change over the benchmark
+  auto run = [&] {
+    switch (variant) {
+      case G2P::usl: gather<mpm::GatherFields{true, true, true}>(ps, g, dt, law, guard); break;
+      case G2P::musl_velocity: gather<mpm::GatherFields{true, false, false}>(ps, g, dt, law, guard); break;
+      case G2P::musl_position_deformation: gather<mpm::GatherFields{false, true, true}>(ps, g, dt, law, guard); break;
+    }
+  };
+  run();
+  for (auto _ : state) {
+    run();
+    benchmark::ClobberMemory();
+  }
+  if (guard.first_bad.load() != mpm::ParticleGuard::none) state.SkipWithError("a particle was flagged invalid");
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * ps.n));
+  state.counters["particles"] = static_cast<double>(ps.n);
+}
+
+void BM_Stress(benchmark::State& state) {
+  auto& ps = particle_set(state.range(0));
+  auto gc = mpm_bench::limit_threads(static_cast<int>(state.range(1)));
+  const auto law = neo_hookean();
+  const auto pv = ps.store.view();
+  auto run = [&] {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ps.n, kParticleGrain), [&](const auto& r) {
+      for (std::size_t p = r.begin(); p < r.end(); ++p) {
+        const double F[4] = {pv.F[0][p], pv.F[1][p], pv.F[2][p], pv.F[3][p]};
+        double s[3];
+        law.stress<2>(F, s);
+        for (int c = 0; c < 3; ++c) pv.s[c][p] = s[c];
+      }
+    });
+  };
+  run();
+  for (auto _ : state) {
+    run();
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * ps.n));
+  state.counters["particles"] = static_cast<double>(ps.n);
+}
+
+void BM_Bin(benchmark::State& state) {
+  auto& ps = particle_set(state.range(0));
+  auto gc = mpm_bench::limit_threads(static_cast<int>(state.range(1)));
+  std::array<const double*, 2> x{ps.store.column(mpm::Field::position, 0).data(),
+                                 ps.store.column(mpm::Field::position, 1).data()};
+  ps.bins.bin(x, ps.n);
+  for (auto _ : state) {
+    ps.bins.bin(x, ps.n);
+    benchmark::ClobberMemory();
+  }
+  ps.bins.adopt_order();  // particles are still in block order: the order is the identity
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * ps.n));
+  state.counters["particles"] = static_cast<double>(ps.n);
+}
+
+/// The reordering the engine does every 16 steps, with the order it sees then: nearly the identity.
+void BM_Permute(benchmark::State& state) {
+  auto& ps = particle_set(state.range(0));
+  auto gc = mpm_bench::limit_threads(static_cast<int>(state.range(1)));
+  ps.bins.adopt_order();
+  const auto order = ps.bins.order();
+  ps.store.permute(order);
+  for (auto _ : state) {
+    ps.store.permute(order);
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * ps.n));
+  state.counters["particles"] = static_cast<double>(ps.n);
+  state.counters["columns"] = static_cast<double>(ps.store.bytes_per_particle() / sizeof(double));
+}
+
+const bool registered = [] {
+  using benchmark::RegisterBenchmark;
+  const std::vector<std::int64_t> sizes{100'000, 1'000'000, 4'000'000};
+  auto args = [](benchmark::internal::Benchmark* b, std::int64_t n, std::vector<int> threads) {
+    for (int t : threads) b->Args({n, t});
+    b->ArgNames({"n", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+  };
+  for (auto n : sizes) {
+    args(RegisterBenchmark("p2g/serial", BM_P2G, P2G::serial), n, {1});
+    args(RegisterBenchmark("p2g/coloured", BM_P2G, P2G::coloured), n, {1, 2});
+    args(RegisterBenchmark("p2g/atomic", BM_P2G, P2G::atomic), n, {1, 2});
+    args(RegisterBenchmark("p2g/per_thread", BM_P2G, P2G::per_thread), n, {1, 2});
+  }
+  const std::int64_t n = 1'000'000;
+  args(RegisterBenchmark("g2p/usl", BM_G2P, G2P::usl), n, {1, 2});
+  args(RegisterBenchmark("g2p/musl_velocity", BM_G2P, G2P::musl_velocity), n, {1, 2});
+  args(RegisterBenchmark("g2p/musl_position_deformation", BM_G2P, G2P::musl_position_deformation), n, {1, 2});
+  args(RegisterBenchmark("stress/neo_hookean", BM_Stress), n, {1, 2});
+  args(RegisterBenchmark("bin", BM_Bin), n, {1, 2});
+  args(RegisterBenchmark("permute", BM_Permute), n, {1, 2});
+  return true;
+}();
+
+}  // namespace

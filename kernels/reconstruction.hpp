@@ -1,0 +1,147 @@
+#pragma once
+// Shared pieces of the per-cell least-squares reconstructions (TLS: kernels/taylor_ls.hpp, thesis §5.2, §6.1;
+// MLS: kernels/mls.hpp, paper eqs 6–17): how scattered samples (particles) are read, the rank-revealing solve of
+// a small normal system, and the record of which fallback a solve needed.
+//
+// Everything is fixed-size (Eigen::Matrix<double, N, M> with N, M known at compile time): no allocation.
+#include <Eigen/Dense>
+#include <array>
+#include <cmath>
+#include <concepts>
+#include <cstddef>
+#include <cstdint>
+
+namespace mpm {
+
+template <int Dim>
+using Vec = Eigen::Matrix<double, Dim, 1>;
+
+/// An axis-aligned cell [lo, hi] (a knot span of the grid).
+template <int Dim>
+struct CellBox {
+  Vec<Dim> lo, hi;
+  Vec<Dim> centre() const { return 0.5 * (lo + hi); }
+  Vec<Dim> half_width() const { return 0.5 * (hi - lo); }  ///< Δx_k of thesis §5.2.2 / §6.1.1
+  double volume() const { return (hi - lo).prod(); }      ///< |Ω_e|, thesis eq. 6.7
+};
+
+/// Scattered samples as a reconstruction reads them: sample i has a position, K field values and a
+/// least-squares weight (1 for the thesis' and the paper's unweighted sums). A particle range sorted by cell,
+/// with values computed on the fly (ρ_p = m_p / V_p, ρ_p v_p, σ_p, …), satisfies this with a few lines.
+template <class S>
+concept SampleSource = requires(const S& s, std::size_t i) {
+  { S::dim } -> std::convertible_to<int>;
+  { S::fields } -> std::convertible_to<int>;
+  { s.size() } -> std::convertible_to<std::size_t>;
+  { s.position(i) } -> std::convertible_to<Vec<S::dim>>;
+  { s.value(i) } -> std::convertible_to<Eigen::Matrix<double, S::fields, 1>>;
+  { s.weight(i) } -> std::convertible_to<double>;
+};
+
+/// Samples stored column-wise (SoA), optionally through an index list (e.g. a cell's range of the sort order).
+template <int Dim, int K>
+struct SoaSamples {
+  static constexpr int dim = Dim;
+  static constexpr int fields = K;
+  std::array<const double*, Dim> x{};  ///< positions, one column per axis
+  std::array<const double*, K> f{};    ///< values, one column per field
+  const double* w = nullptr;           ///< least-squares weight per sample (e.g. V_p); null: all 1
+  const unsigned* index = nullptr;     ///< sample i is row index[i] of the columns; null: row i
+  std::size_t count = 0;
+
+  std::size_t size() const { return count; }
+  std::size_t row(std::size_t i) const { return index ? index[i] : i; }
+  Vec<Dim> position(std::size_t i) const {
+    Vec<Dim> p;
+    for (int d = 0; d < Dim; ++d) p[d] = x[d][row(i)];
+    return p;
+  }
+  Eigen::Matrix<double, K, 1> value(std::size_t i) const {
+    Eigen::Matrix<double, K, 1> v;
+    for (int k = 0; k < K; ++k) v[k] = f[k][row(i)];
+    return v;
+  }
+  double weight(std::size_t i) const { return w ? w[row(i)] : 1.0; }
+};
+
+/// No samples (e.g. "no neighbour particles supplied").
+template <int Dim, int K>
+struct NoSamples {
+  static constexpr int dim = Dim;
+  static constexpr int fields = K;
+  std::size_t size() const { return 0; }
+  Vec<Dim> position(std::size_t) const { return Vec<Dim>::Zero(); }
+  Eigen::Matrix<double, K, 1> value(std::size_t) const { return Eigen::Matrix<double, K, 1>::Zero(); }
+  double weight(std::size_t) const { return 0.0; }
+};
+
+/// Which stage of the fixed completion order produced a fit (DESIGN.md "Per-cell solves"):
+/// the cell's own samples at the requested degree → plus neighbour samples → lower degree → constant.
+enum class FitStage : std::uint8_t {
+  full,       ///< own samples, requested degree: no fallback
+  neighbour,  ///< requested degree, with the neighbour samples added
+  degree,     ///< a lower, non-constant degree (neighbours included when supplied)
+  constant,   ///< constant only (TLS: c_0 from the integral; LS: sample mean; MLS: Shepard estimate)
+  empty       ///< no sample at all and nothing prescribed: zero
+};
+
+struct FitStatus {
+  FitStage stage = FitStage::full;
+  int degree = 0;            ///< Taylor (or MLS) degree actually used
+  std::size_t points = 0;    ///< samples that entered the least-squares sums
+};
+
+/// Fallback counters, one per stage; a solve is counted once, in the stage that produced its result.
+/// Accumulate per thread and add (operator+=), or add each FitStatus with add().
+struct FallbackCounts {
+  std::size_t neighbour = 0;
+  std::size_t degree = 0;
+  std::size_t constant = 0;
+  std::size_t empty = 0;
+
+  void add(const FitStatus& s) {
+    switch (s.stage) {
+      case FitStage::full: break;
+      case FitStage::neighbour: ++neighbour; break;
+      case FitStage::degree: ++degree; break;
+      case FitStage::constant: ++constant; break;
+      case FitStage::empty: ++empty; break;
+    }
+  }
+  FallbackCounts& operator+=(const FallbackCounts& o) {
+    neighbour += o.neighbour;
+    degree += o.degree;
+    constant += o.constant;
+    empty += o.empty;
+    return *this;
+  }
+  std::size_t total() const { return neighbour + degree + constant + empty; }
+  friend bool operator==(const FallbackCounts&, const FallbackCounts&) = default;
+};
+
+namespace detail {
+
+/// Solves the symmetric positive semi-definite normal system D x = r (N unknowns, K right-hand sides) if D has
+/// full rank; returns false without touching x otherwise. Rank is decided by a column-pivoted Householder QR of
+/// the Jacobi-equilibrated matrix S D S (S = diag(D_ii^{-1/2})), a pivot counting as zero below `threshold`
+/// times the largest one. The equilibration makes the test independent of the scaling of the basis functions
+/// and of the sample weights; since D = Bᵀ W B, a relative threshold τ on D is √τ on the singular values of the
+/// sample matrix B (τ = 1e-10: columns dependent to 1e-5 count as dependent). Never detected afterwards by NaN.
+template <int N, int K, class DerivedD, class DerivedR>
+inline bool solve_full_rank(const Eigen::MatrixBase<DerivedD>& D, const Eigen::MatrixBase<DerivedR>& r,
+                            double threshold, Eigen::Matrix<double, N, K>& x) {
+  Eigen::Matrix<double, N, 1> s;
+  for (int i = 0; i < N; ++i) s[i] = D(i, i) > 0.0 ? 1.0 / std::sqrt(D(i, i)) : 0.0;  // zero column: rank < N
+  const Eigen::Matrix<double, N, N> Ds = s.asDiagonal() * D * s.asDiagonal();
+  Eigen::ColPivHouseholderQR<Eigen::Matrix<double, N, N>> qr;
+  qr.setThreshold(threshold);
+  qr.compute(Ds);
+  if (qr.rank() < N) return false;
+  const Eigen::Matrix<double, N, K> rs = s.asDiagonal() * r;
+  x = s.asDiagonal() * qr.solve(rs);
+  return true;
+}
+
+}  // namespace detail
+
+}  // namespace mpm

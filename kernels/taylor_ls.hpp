@@ -1,0 +1,234 @@
+#pragma once
+// Taylor least-squares (TLS) reconstruction on one cell: thesis §5.2 (1D), §6.1.1 (2D rectangles), §5.3
+// (use in MPM). A field is fitted as f̂ = Σ_k c_k ψ_k with the local Taylor basis ψ_k of the cell. Every ψ_k
+// except ψ_1 = 1 has zero mean over the cell (thesis eq. 5.7), so ∫_cell f̂ = c_0 |Ω_e| (eq. 5.8): fixing
+// c_0 = c / |Ω_e| (eq. 5.9) preserves a prescribed integral c exactly — Σ m_p for the density, Σ m_p v_p for the
+// momentum — and the other coefficients are a least-squares fit (eq. 5.1 without ψ_1, §5.3.1) of what ψ_1
+// leaves: min Σ_p w_p (c_0 + Σ_{k≥1} c_k ψ_k(x_p) − f_p)². An unconstrained variant (all coefficients by least
+// squares, §5.3.1 "standard least-squares approach") serves the stress and the body force.
+//
+// Rank deficiency (too few or badly placed samples: thesis Fig. 5.5 in 1D, §6.3.1 in 2D where runs crashed) is
+// detected from a pivoted QR of the normal matrix, and the fit is completed in a fixed order, each step counted:
+// neighbour samples (thesis §5.2.3, Fig. 5.7) → lower degree (§5.2.3) → constant. The constrained fit keeps
+// c_0 from the integral in every stage, so it is conservative whatever happens.
+//
+// Coefficient index k = 0..N−1 here is the thesis' ψ_{k+1}. Bases are hierarchical: degree d uses the first
+// taylor_size(d) functions of degree d+1, so a lower-degree fit is a leading block of the same normal system.
+#include <cstddef>
+
+#include "kernels/reconstruction.hpp"
+
+namespace mpm {
+
+/// Number of Taylor basis functions: 1D degree+1 (1, 2, 3); 2D (degree+1)(degree+2)/2 (1, 3, 6).
+template <int Dim>
+constexpr int taylor_size(int degree) {
+  static_assert(Dim == 1 || Dim == 2, "TLS is implemented in 1D and 2D");
+  return Dim == 1 ? degree + 1 : (degree + 1) * (degree + 2) / 2;
+}
+
+template <int Dim, int Degree>
+using TaylorVector = Eigen::Matrix<double, taylor_size<Dim>(Degree), 1>;
+
+/// Local Taylor basis at cell coordinates ξ = (x − x_c) / Δx (∈ [−1, 1] inside the cell, Δx the half width):
+///   1D (thesis §5.2.2):  ψ = [1, ξ, ξ²/2 − 1/6]
+///   2D (thesis eqs 6.1–6.6, 6.8–6.13 on a rectangle):  ψ = [1, ξ₁, ξ₂, ξ₁²/2 − 1/6, ξ₂²/2 − 1/6, ξ₁ξ₂]
+/// The subtracted constants are the cell averages: mean of ξ²/2 over [−1, 1] is 1/6, of ξ₁ξ₂ over the square 0.
+template <int Dim, int Degree>
+inline TaylorVector<Dim, Degree> taylor_basis_ref(const Vec<Dim>& xi) {
+  static_assert(Degree >= 0 && Degree <= 2, "Taylor degree 0, 1 or 2");
+  TaylorVector<Dim, Degree> psi;
+  psi[0] = 1.0;                                                          // ψ_1, eq. 6.1
+  if constexpr (Dim == 1) {
+    if constexpr (Degree >= 1) psi[1] = xi[0];                           // ψ_2
+    if constexpr (Degree >= 2) psi[2] = 0.5 * xi[0] * xi[0] - 1.0 / 6.0; // ψ_3
+  } else {
+    if constexpr (Degree >= 1) {
+      psi[1] = xi[0];                                                    // ψ_2, eq. 6.2
+      psi[2] = xi[1];                                                    // ψ_3, eq. 6.3
+    }
+    if constexpr (Degree >= 2) {
+      psi[3] = 0.5 * xi[0] * xi[0] - 1.0 / 6.0;                          // ψ_4, eqs 6.4, 6.8–6.9
+      psi[4] = 0.5 * xi[1] * xi[1] - 1.0 / 6.0;                          // ψ_5, eqs 6.5, 6.10–6.11
+      psi[5] = xi[0] * xi[1];                                            // ψ_6, eqs 6.6, 6.12–6.13 (mean 0)
+    }
+  }
+  return psi;
+}
+
+/// Centre and inverse half width of a cell: the map x ↦ ξ of the Taylor basis.
+template <int Dim>
+struct TaylorFrame {
+  Vec<Dim> centre, inv_half;
+  explicit TaylorFrame(const CellBox<Dim>& cell)
+      : centre(cell.centre()), inv_half(cell.half_width().cwiseInverse()) {}
+  Vec<Dim> xi(const Vec<Dim>& x) const { return (x - centre).cwiseProduct(inv_half); }
+};
+
+/// Taylor basis of `cell` at the physical point x.
+template <int Dim, int Degree>
+inline TaylorVector<Dim, Degree> taylor_basis(const CellBox<Dim>& cell, const Vec<Dim>& x) {
+  return taylor_basis_ref<Dim, Degree>(TaylorFrame<Dim>(cell).xi(x));
+}
+
+/// A Taylor fit of K fields on one cell: f̂_j(x) = Σ_k c(k, j) ψ_k(x). After a fallback to a lower degree the
+/// unused (higher) coefficients are zero, so evaluation always uses the full basis.
+template <int Dim, int Degree, int K>
+struct TaylorFit {
+  static constexpr int size = taylor_size<Dim>(Degree);
+  CellBox<Dim> cell;
+  Eigen::Matrix<double, size, K> c = Eigen::Matrix<double, size, K>::Zero();
+  FitStatus status;
+
+  /// f̂(x) = ψ(x)ᵀ c  (thesis eq. 5.5 with the coefficients found).
+  Eigen::Matrix<double, K, 1> operator()(const Vec<Dim>& x) const {
+    return c.transpose() * taylor_basis<Dim, Degree>(cell, x);
+  }
+  /// The same at many points (e.g. a cell's Gauss points), ξ-frame computed once. out[g] = f̂(x[g]).
+  template <class Points, class Out>
+  void evaluate(const Points& x, Out& out) const {
+    const TaylorFrame<Dim> fr(cell);
+    for (std::size_t g = 0; g < std::size(x); ++g)
+      out[g] = c.transpose() * taylor_basis_ref<Dim, Degree>(fr.xi(x[g]));
+  }
+  /// ∫_cell f̂ = c_0 |Ω_e|, exactly (thesis eq. 5.8).
+  Eigen::Matrix<double, K, 1> integral() const { return c.row(0).transpose() * cell.volume(); }
+};
+
+struct TlsOptions {
+  /// Relative pivot threshold of the rank test on the equilibrated normal matrix (see detail::solve_full_rank).
+  double rank_threshold = 1e-10;
+  /// Least-squares weight of a neighbour sample relative to the cell's own (thesis Fig. 5.7 uses them as is: 1).
+  double neighbour_weight = 1.0;
+  /// Accept a stage only with at least as many samples as Taylor functions of its degree (ψ_1 included), even if
+  /// the constrained matrix happens to have full rank — thesis §5.3.1: "optimal performance of the TLS technique
+  /// requires at least three particles in each element" (n_b = 3). Without it, 2 samples fix the 2 slopes of a
+  /// 2D linear fit exactly (the constraint acts as a third datum at the centroid), with no redundancy.
+  bool require_points_per_function = true;
+};
+
+namespace detail {
+
+/// Normal equations of one cell, thesis eqs 5.1–5.4 with weights: D = Σ w ψ ψᵀ, b = Σ w ψ (f − shift)ᵀ.
+/// The shift (c_0 for the constrained fit, a sample value otherwise) keeps b free of cancellation when a field
+/// has a large mean and small variation (momentum of a translating body).
+template <int Dim, int Degree, int K>
+struct TaylorNormalSystem {
+  static constexpr int N = taylor_size<Dim>(Degree);
+  Eigen::Matrix<double, N, N> D = Eigen::Matrix<double, N, N>::Zero();
+  Eigen::Matrix<double, N, K> b = Eigen::Matrix<double, N, K>::Zero();
+  std::size_t points = 0;
+
+  template <SampleSource S>
+  void add(const TaylorFrame<Dim>& fr, const S& s, const Eigen::Matrix<double, K, 1>& shift, double scale) {
+    for (std::size_t i = 0; i < s.size(); ++i) {
+      const TaylorVector<Dim, Degree> psi = taylor_basis_ref<Dim, Degree>(fr.xi(s.position(i)));
+      const double w = scale * s.weight(i);
+      D.noalias() += (w * psi) * psi.transpose();
+      b.noalias() += (w * psi) * (s.value(i) - shift).transpose();
+    }
+    points += s.size();
+  }
+
+  /// Least squares at degree Deg ≤ Degree. Constrained: unknowns c_1..c_{n−1} (c_0 is fixed and already
+  /// subtracted through the shift), the block of D without ψ_1 (§5.3.1). Unconstrained: all n coefficients.
+  template <int Deg, bool Constrained>
+  bool solve(const TlsOptions& opt, Eigen::Matrix<double, N, K>& c) const {
+    constexpr int n = taylor_size<Dim>(Deg);
+    constexpr int off = Constrained ? 1 : 0;
+    constexpr int m = n - off;
+    if constexpr (m == 0) {
+      return true;  // constrained degree 0: c_0 alone, nothing to fit
+    } else {
+      if (opt.require_points_per_function && points < static_cast<std::size_t>(n)) return false;
+      Eigen::Matrix<double, m, K> x;
+      if (!solve_full_rank<m, K>(D.template block<m, m>(off, off), b.template block<m, K>(off, 0),
+                                 opt.rank_threshold, x))
+        return false;
+      c.setZero();
+      c.template block<m, K>(off, 0) = x;
+      return true;
+    }
+  }
+};
+
+/// The completion order shared by the constrained and the unconstrained fit. `shift` is added back to c_0.
+template <bool Constrained, int Degree, int Dim, int K, SampleSource Own, SampleSource Nb>
+inline TaylorFit<Dim, Degree, K> taylor_fit(const CellBox<Dim>& cell, const Own& own, const Nb& neighbours,
+                                            const Eigen::Matrix<double, K, 1>& shift, const TlsOptions& opt) {
+  static_assert(Own::dim == Dim && Nb::dim == Dim, "sample dimension must match the cell");
+  static_assert(Own::fields == K && Nb::fields == K, "sample field count must match");
+  using System = TaylorNormalSystem<Dim, Degree, K>;
+  TaylorFit<Dim, Degree, K> fit;
+  fit.cell = cell;
+  const TaylorFrame<Dim> fr(cell);
+  System sys;
+  sys.add(fr, own, shift, 1.0);
+  // Own-sample constant for the unconstrained constant stage: Σ w (f − shift) / Σ w over the cell's samples.
+  const double own_w = sys.D(0, 0);
+  const Eigen::Matrix<double, K, 1> own_b = sys.b.row(0).transpose();
+
+  auto done = [&](FitStage stage, int degree) {
+    fit.c.row(0) += shift.transpose();
+    fit.status = {stage, degree, sys.points};
+    return fit;
+  };
+
+  // 1. The cell's own samples at the requested degree.
+  if (sys.template solve<Degree, Constrained>(opt, fit.c)) return done(FitStage::full, Degree);
+  // 2. (a) add the neighbour samples (thesis §5.2.3, Fig. 5.7), same degree.
+  if (neighbours.size() > 0) {
+    sys.add(fr, neighbours, shift, opt.neighbour_weight);
+    if (sys.template solve<Degree, Constrained>(opt, fit.c)) return done(FitStage::neighbour, Degree);
+  }
+  // 3. (b) lower the degree (thesis §5.2.3: "reducing the number of basis functions"), neighbours kept.
+  if constexpr (Degree >= 2) {
+    static_assert(Degree == 2, "Taylor degree 0, 1 or 2");
+    if (sys.template solve<1, Constrained>(opt, fit.c)) return done(FitStage::degree, 1);
+  }
+  // 4. (c) constant. Constrained: c_0 from the integral (already the shift). Unconstrained: weighted mean of the
+  //    cell's own samples, or of the neighbours when the cell has none; zero when there is nothing at all.
+  fit.c.setZero();
+  if constexpr (!Constrained) {
+    if (own_w > 0.0) {
+      fit.c.row(0) = (own_b / own_w).transpose();
+    } else if (sys.D(0, 0) > 0.0) {
+      fit.c.row(0) = sys.b.row(0) / sys.D(0, 0);
+    } else {
+      fit.status = {FitStage::empty, 0, 0};
+      return fit;  // no sample: zero (the shift is zero then)
+    }
+  }
+  return done(FitStage::constant, 0);
+}
+
+template <SampleSource S>
+inline Eigen::Matrix<double, S::fields, 1> first_value(const S& s) {
+  return s.size() > 0 ? Eigen::Matrix<double, S::fields, 1>(s.value(0))
+                      : Eigen::Matrix<double, S::fields, 1>::Zero();
+}
+
+}  // namespace detail
+
+/// Conservative TLS of K fields on `cell` (thesis §5.2.3, §5.3.1 eq. 5.14): c_0 = integral / |Ω_e| (eq. 5.9),
+/// so ∫_cell f̂ = integral exactly in every stage; c_1.. by least squares on f_p − c_0 over `own` (the cell's
+/// particles), completed with `neighbours` (particles of the adjacent cells; pass NoSamples if none) only if
+/// the own samples do not determine the fit. `integral`: e.g. Σ m_p for ρ, Σ m_p v_p for ρv.
+template <int Degree, int Dim, int K, SampleSource Own, SampleSource Nb>
+inline TaylorFit<Dim, Degree, K> reconstruct_tls(const CellBox<Dim>& cell, const Own& own, const Nb& neighbours,
+                                                 const Eigen::Matrix<double, K, 1>& integral,
+                                                 const TlsOptions& opt = {}) {
+  const Eigen::Matrix<double, K, 1> c0 = integral / cell.volume();  // thesis eq. 5.9
+  return detail::taylor_fit<true, Degree>(cell, own, neighbours, c0, opt);
+}
+
+/// Unconstrained least squares in the Taylor basis (thesis §5.3.1, eq. 5.12: stress; paper eq. 20: body force):
+/// all coefficients from eq. 5.1, same completion order; the constant stage is the weighted sample mean.
+template <int Degree, int Dim, SampleSource Own, SampleSource Nb>
+inline TaylorFit<Dim, Degree, Own::fields> reconstruct_ls(const CellBox<Dim>& cell, const Own& own,
+                                                          const Nb& neighbours, const TlsOptions& opt = {}) {
+  const auto shift = own.size() > 0 ? detail::first_value(own) : detail::first_value(neighbours);
+  return detail::taylor_fit<false, Degree>(cell, own, neighbours, shift, opt);
+}
+
+}  // namespace mpm

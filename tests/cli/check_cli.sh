@@ -1,0 +1,50 @@
+#!/usr/bin/env bash
+# The `mpm` command-line contract (DESIGN.md): exit statuses, one-line errors naming the key, the summary JSON.
+set -uo pipefail
+mpm=$1 scenes=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+cd "$work"
+fail=0 pass=0
+expect() {  # expect STATUS PATTERN -- command...
+  local want=$1 pattern=$2; shift 3
+  local out status
+  out=$("$@" 2>&1); status=$?
+  if [ "$status" -ne "$want" ] || ! grep -qE -- "$pattern" <<<"$out"; then
+    echo "FAIL: $* -> status $status (want $want), output: $out"; fail=$((fail+1))
+  else pass=$((pass+1)); fi
+}
+expect 0 "valid 2D scene" -- "$mpm" validate "$scenes/plate.json"
+expect 2 "material.E" -- "$mpm" validate "$scenes/plate.json" --set material.E=-1
+expect 2 "grid.cells" -- "$mpm" run "$scenes/plate.json" --set grid.cells=[0,8] --quiet
+expect 2 "material.nu" -- "$mpm" run "$scenes/plate.json" --set material.nu=0.5 --quiet
+expect 2 "time.dt" -- "$mpm" run "$scenes/plate.json" --set time.dt=0.01 --quiet
+expect 2 "--out" -- "$mpm" run "$scenes/plate.json" --out /nonexistent/dir/x.h5 --quiet
+expect 2 "plate.json|cannot read" -- "$mpm" run "$work/missing.json" --quiet
+printf '{\n  "dimension": 2,\n  "grid": {,}\n}\n' > bad.json
+expect 2 "bad.json:3:" -- "$mpm" validate bad.json
+expect 2 "not expected" -- "$mpm" run --no-such-option
+# a short successful run with a summary and an output file; nothing written for invalid scenes above
+expect 0 "errors \(RMS\)" -- "$mpm" run "$scenes/plate.json" --set grid.cells=[8,8] --set time.end=0.001 \
+  --out run.h5 --summary s.json --threads 2
+python3 - <<'PY' || { echo "FAIL: summary contract"; fail=$((fail+1)); }
+import json, os
+s = json.load(open("s.json"))
+for k in ["status", "steps", "particles", "threads", "wall_s", "particle_steps_per_s", "errors", "conservation",
+          "fallbacks", "pipeline", "columns", "bytes_per_particle"]:
+    assert k in s, k
+assert s["status"] == "ok" and s["steps"] == 100 and s["threads"] == 2
+assert set(s["errors"]) == {"displacement_rms", "velocity_rms", "stress_rms"}
+assert s["conservation"]["mass_rel_max"] <= 1e-13
+assert os.path.exists("run.h5") and os.path.exists("run.xdmf") and not os.path.exists("run.h5.partial")
+PY
+# a particle leaving the grid: exit 3, a precise reason, the output file still written
+cat > escape.json <<'J'
+{"dimension": 2, "grid": {"length": [1, 1], "cells": [10, 10]},
+ "bodies": [{"box": [[0.4, 0.4], [0.6, 0.6]], "velocity": [50.0, 0.0]}],
+ "material": {"E": 1e5, "nu": 0.3, "density": 1000}, "time": {"cfl": 0.5, "end": 1.0}}
+J
+expect 3 "left the grid" -- "$mpm" run escape.json --out escape.h5 --summary e.json --quiet
+[ -f escape.h5 ] && pass=$((pass+1)) || { echo "FAIL: no output after an unstable run"; fail=$((fail+1)); }
+echo "cli: $pass passed, $fail failed"
+[ "$fail" -eq 0 ]
