@@ -2,6 +2,7 @@
 // Constitutive laws σ(F) (thesis eqs 2.13, 2.14), as small value types chosen once per run (std::variant), so the
 // particle loop calls a concrete, inlinable function. 1D keeps the axis component of the 3D law under uniaxial
 // strain; 2D is plane strain.
+#include <algorithm>
 #include <cmath>
 #include <variant>
 
@@ -32,6 +33,8 @@ struct LinearElastic {
       s[2] = k.lambda * tr + 2 * k.mu * e11;
     }
   }
+  /// P-wave speed at volume ratio J (constant for the linear law).
+  double wave_speed(double, double rho0) const { return std::sqrt((k.lambda + 2 * k.mu) / rho0); }
   /// Strain energy per reference volume, ½ σ:ε.
   template <int Dim>
   double energy_density(const double* F) const {
@@ -57,6 +60,12 @@ struct NeoHookean {
       s[1] = k.mu * (F[0] * F[2] + F[1] * F[3]) * inv_J;
       s[2] = (a + k.mu * (F[2] * F[2] + F[3] * F[3] - 1.0)) * inv_J;
     }
+  }
+  /// Current P-wave speed at volume ratio J, from the uniaxial tangent dP/dF = (λ(1 − ln J) + μ(J² + 1))/J²
+  /// of the 1D law (J taken as the stretch), mapped to the current configuration (× J).
+  double wave_speed(double J, double rho0) const {
+    const double tangent = (k.lambda * (1 - std::log(J)) + k.mu * (J * J + 1)) / (J * J);
+    return J * std::sqrt(std::max(tangent, 0.0) / rho0);
   }
   /// ψ = μ/2 (tr FᵀF − d) − μ ln J + λ/2 (ln J)², per reference volume.
   template <int Dim>

@@ -69,11 +69,16 @@ std::vector<std::string> ParticleStore<Dim>::column_names() const {
 }
 
 template <int Dim>
-std::span<const double> ParticleStore<Dim>::column(const std::string& name) const {
+std::span<double> ParticleStore<Dim>::column(const std::string& name) {
   for (int f = 0; f < field_count; ++f)
     for (int c = 0; c < static_cast<int>(columns_[f].size()); ++c)
       if (component_name<Dim>(Field(f), c) == name) return columns_[f][c];
   throw std::logic_error("ParticleStore: no column named " + name);
+}
+
+template <int Dim>
+std::span<const double> ParticleStore<Dim>::column(const std::string& name) const {
+  return const_cast<ParticleStore*>(this)->column(name);
 }
 
 template <int Dim>

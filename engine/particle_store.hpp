@@ -67,6 +67,7 @@ class ParticleStore {
   /// Names of the allocated columns, in storage order (x0, x1, X0, ..., m, V0).
   std::vector<std::string> column_names() const;
   /// Column by its name (as listed by column_names()).
+  std::span<double> column(const std::string& name);
   std::span<const double> column(const std::string& name) const;
 
   std::size_t bytes_per_particle() const;

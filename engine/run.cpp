@@ -2,11 +2,14 @@
 
 #include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <filesystem>
+#include <functional>
 #include <optional>
-#include <thread>
 
 #include <tbb/global_control.h>
 #include <tbb/info.h>
@@ -21,6 +24,8 @@ namespace {
 using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+constexpr long backup_every = 64;  // steps between in-memory copies used to recover the last good state
 
 /// One-line progress on stderr, redrawn in place; only on a terminal, and only once a run has taken a while.
 class Progress {
@@ -47,6 +52,27 @@ class Progress {
   double last_ = 0.0;
 };
 
+/// SIGINT / SIGTERM request a clean stop (checkpoint, close the file) at the end of the current step.
+std::atomic<int> stop_signal{0};
+extern "C" void request_stop(int sig) { stop_signal.store(sig); }
+
+class StopOnSignals {
+ public:
+  StopOnSignals() {
+    stop_signal.store(0);
+    old_int_ = std::signal(SIGINT, request_stop);
+    old_term_ = std::signal(SIGTERM, request_stop);
+  }
+  ~StopOnSignals() {
+    std::signal(SIGINT, old_int_);
+    std::signal(SIGTERM, old_term_);
+  }
+
+ private:
+  void (*old_int_)(int);
+  void (*old_term_)(int);
+};
+
 template <int Dim>
 std::vector<ColumnView> columns_of(const ParticleStore<Dim>& store) {
   std::vector<ColumnView> cols;
@@ -54,28 +80,70 @@ std::vector<ColumnView> columns_of(const ParticleStore<Dim>& store) {
   return cols;
 }
 
-template <int Dim>
-RunResult run_dim(const Scene& scene, const RunOptions& options, int threads) {
-  RunResult result;
-  Simulation<Dim> sim(scene);  // SceneError escapes: status 2, nothing written yet
+/// Where a run continues from: a state, the energy it started with and the worst drift so far.
+struct StartPoint {
+  SimulationState state;
+  double energy0 = 0.0, drift_max = 0.0;
+};
 
-  const std::string out_path = options.out.empty() ? scene.output.file : options.out;
-  std::optional<H5Writer> out;
+template <int Dim>
+void write_checkpoint(H5Writer& out, const Simulation<Dim>& sim, double energy0, double drift_max) {
+  const SimulationState st = sim.save_state();
+  std::vector<ColumnView> cols;
+  for (std::size_t k = 0; k < st.names.size(); ++k) cols.push_back({st.names[k], st.columns[k]});
+  const std::pair<std::string, double> scalars[] = {{"mass_rel_max", st.conservation.mass_rel_max},
+                                                    {"momentum_rel_max", st.conservation.momentum_rel_max},
+                                                    {"energy0", energy0},
+                                                    {"drift_rel_max", drift_max}};
+  out.write_checkpoint(st.step, st.time, cols, scalars);
+}
+
+StartPoint read_checkpoint(const std::string& file) {
+  StartPoint sp;
+  sp.state.step = static_cast<long>(read_number_attribute(file, "/checkpoint", "step"));
+  sp.state.time = read_number_attribute(file, "/checkpoint", "time");
+  sp.state.conservation = {read_number_attribute(file, "/checkpoint", "mass_rel_max"),
+                           read_number_attribute(file, "/checkpoint", "momentum_rel_max")};
+  sp.energy0 = read_number_attribute(file, "/checkpoint", "energy0");
+  sp.drift_max = read_number_attribute(file, "/checkpoint", "drift_rel_max");
+  sp.state.names = list_datasets(file, "/checkpoint");
+  for (const auto& name : sp.state.names) sp.state.columns.push_back(read_dataset(file, "/checkpoint/" + name));
+  return sp;
+}
+
+/// Opens the run file once the scene is known to be runnable (so an invalid scene writes nothing).
+using OpenOutput = std::function<std::optional<H5Writer>()>;
+
+template <int Dim>
+RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, const OpenOutput& open_output,
+                  const std::optional<StartPoint>& start) {
+  RunResult result;
+  Simulation<Dim> sim(scene);  // SceneError escapes: status 2
+  std::optional<H5Writer> out = open_output();
+
   std::vector<std::string> metric_names{"step", "t", "kinetic_energy", "strain_energy", "total_energy",
                                         "mass_rel_max", "momentum_rel_max"};
   if (sim.has_exact())
     for (const char* e : {"displacement_rms", "velocity_rms", "stress_rms"}) metric_names.push_back(e);
-  if (!out_path.empty()) {
-    out.emplace(out_path, scene.source.dump(), Dim);
-    out->set_metric_names(metric_names);
+  if (out) out->set_metric_names(metric_names);
+
+  double energy0 = sim.energy().total(), drift_max = 0.0;
+  if (start) {
+    sim.load_state(start->state);
+    energy0 = start->energy0;
+    drift_max = start->drift_max;
+    if (out) out->discard_after(sim.steps_done(), sim.time());
   }
   const long total = sim.steps_total();
   const long metrics_every = std::max(1L, total / 200);
   const long snapshot_every = scene.output.every > 0 ? scene.output.every : total;
+  const long checkpoint_every = scene.output.checkpoint_every;
+  const bool check_cfl = scene.time.cfl.has_value();
 
   auto record_metrics = [&] {
-    if (!out) return;
     const Energy e = sim.energy();
+    if (energy0 > 0) drift_max = std::max(drift_max, std::abs(e.total() - energy0) / energy0);
+    if (!out) return;
     std::vector<double> row{static_cast<double>(sim.steps_done()), sim.time(), e.kinetic, e.strain, e.total(),
                             sim.conservation().mass_rel_max, sim.conservation().momentum_rel_max};
     if (sim.has_exact()) {
@@ -88,34 +156,61 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads) {
     if (out) out->write_snapshot(sim.steps_done(), sim.time(), columns_of(sim.particles()));
   };
 
-  const Energy e0 = sim.energy();
-  double drift_max = 0.0;
-  record_metrics();
-  snapshot();
+  if (!start) {
+    record_metrics();
+    snapshot();
+  }
+  SimulationState backup = sim.save_state();
   Progress progress(!options.quiet);
+  StopOnSignals signals;
   double stepping_s = 0.0;
+  long steps_timed = 0;
   try {
     while (!sim.finished()) {
+      if (sim.steps_done() % backup_every == 0) backup = sim.save_state();
       const auto t0 = Clock::now();
       sim.step();
       stepping_s += seconds_since(t0);
+      ++steps_timed;
       const long s = sim.steps_done();
-      if (s % metrics_every == 0 || sim.finished()) {
-        record_metrics();
-        if (e0.total() > 0) drift_max = std::max(drift_max, std::abs(sim.energy().total() - e0.total()) / e0.total());
-      }
+      if (check_cfl && sim.dt() > sim.critical_dt())
+        throw UnstableRun("CFL violated at step " + std::to_string(s) + " (t = " + std::to_string(sim.time()) +
+                          " s): dt = " + std::to_string(sim.dt()) + " s exceeds the current critical step " +
+                          std::to_string(sim.critical_dt()) + " s (material stiffened or particles sped up)");
+      if (s % metrics_every == 0 || sim.finished()) record_metrics();
       if (s % snapshot_every == 0 || sim.finished()) snapshot();
+      if (out && checkpoint_every > 0 && s % checkpoint_every == 0 && !sim.finished())
+        write_checkpoint(*out, sim, energy0, drift_max);
       progress.update(s, total, sim.time());
+      if (const int sig = stop_signal.load(); sig != 0 && !sim.finished()) {
+        result.status = exit_failure;
+        result.message = "stopped by signal " + std::to_string(sig) + " at step " + std::to_string(s);
+        if (out) {
+          write_checkpoint(*out, sim, energy0, drift_max);
+          result.message += "; checkpoint written to " + out->path() + " (continue with: mpm run --resume " +
+                            out->path() + ")";
+        }
+        break;
+      }
     }
   } catch (const UnstableRun& e) {
     result.status = exit_unstable;
     result.message = e.what();
-    // the state that failed is kept for inspection beside the last good snapshot
+    // replay from the last backup up to the step before the failure: the run is deterministic, so this is the
+    // last good state exactly; it is saved as a snapshot (and checkpoint) beside the earlier ones
+    const long last_good = sim.steps_done();  // a failed step is not counted
+    sim.load_state(backup);
+    while (sim.steps_done() < last_good) sim.step();
     snapshot();
+    if (out) {
+      write_checkpoint(*out, sim, energy0, drift_max);
+      out->set_attribute("status", "unstable: " + result.message);
+    }
+    result.message += "; last good state (step " + std::to_string(sim.steps_done()) + ") saved";
   }
 
   auto& j = result.summary;
-  j["status"] = result.status == exit_ok ? "ok" : "unstable";
+  j["status"] = result.status == exit_ok ? "ok" : result.status == exit_unstable ? "unstable" : "interrupted";
   if (!result.message.empty()) j["reason"] = result.message;
   j["steps"] = sim.steps_done();
   j["t"] = sim.time();
@@ -124,7 +219,7 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads) {
   j["threads"] = threads;
   j["wall_s"] = stepping_s;
   j["particle_steps_per_s"] =
-      stepping_s > 0 ? static_cast<double>(sim.particles().size()) * sim.steps_done() / stepping_s : 0.0;
+      stepping_s > 0 ? static_cast<double>(sim.particles().size()) * steps_timed / stepping_s : 0.0;
   if (sim.has_exact() && result.status == exit_ok) {
     const RunErrors err = sim.errors();
     j["errors"] = {{"displacement_rms", err.displacement_rms},
@@ -133,7 +228,7 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads) {
   }
   j["conservation"] = {{"mass_rel_max", sim.conservation().mass_rel_max},
                        {"momentum_rel_max", sim.conservation().momentum_rel_max}};
-  j["energy"] = {{"initial", e0.total()}, {"drift_rel_max", drift_max}};
+  j["energy"] = {{"initial", energy0}, {"drift_rel_max", drift_max}};
   j["fallbacks"] = {{"neighbour", 0}, {"degree", 0}, {"constant", 0}};
   j["pipeline"] = sim.pipeline();
   j["columns"] = sim.particles().column_names();
@@ -146,20 +241,56 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads) {
   return result;
 }
 
-}  // namespace
+RunResult invalid(const std::string& message) {
+  RunResult r;
+  r.status = exit_invalid;
+  r.message = message;
+  r.summary = {{"status", "invalid"}, {"reason", message}};
+  return r;
+}
 
-RunResult run_scene(const Scene& scene, const RunOptions& options) {
+template <class F>
+RunResult with_threads(const RunOptions& options, F&& run) {
   const int threads = options.threads > 0 ? options.threads : tbb::info::default_concurrency();
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   try {
-    return scene.dimension == 1 ? run_dim<1>(scene, options, threads) : run_dim<2>(scene, options, threads);
+    return run(threads);
   } catch (const SceneError& e) {
-    RunResult r;
-    r.status = exit_invalid;
-    r.message = e.what();
-    r.summary = {{"status", "invalid"}, {"reason", r.message}};
-    return r;
+    return invalid(e.what());
   }
+}
+
+}  // namespace
+
+RunResult run_scene(const Scene& scene, const RunOptions& options) {
+  return with_threads(options, [&](int threads) {
+    const std::string path = options.out.empty() ? scene.output.file : options.out;
+    const OpenOutput open = [&]() -> std::optional<H5Writer> {
+      if (path.empty()) return std::nullopt;
+      return H5Writer(path, scene.source.dump(), scene.dimension);
+    };
+    return scene.dimension == 1 ? run_dim<1>(scene, options, threads, open, std::nullopt)
+                                : run_dim<2>(scene, options, threads, open, std::nullopt);
+  });
+}
+
+RunResult resume_run(const std::string& path, const RunOptions& options) {
+  return with_threads(options, [&](int threads) {
+    const bool killed = !std::filesystem::exists(path) && std::filesystem::exists(path + ".partial");
+    const std::string file = killed ? path + ".partial" : path;
+    if (!std::filesystem::exists(file)) return invalid("--resume " + path + ": no such run file");
+    StartPoint start;
+    Scene scene;
+    try {
+      scene = parse_scene(read_scene_attribute(file));
+      start = read_checkpoint(file);
+    } catch (const OutputError& e) {
+      return invalid("--resume " + path + ": no usable checkpoint (" + std::string(e.what()) + ")");
+    }
+    const OpenOutput open = [&]() -> std::optional<H5Writer> { return H5Writer::append(path); };
+    return scene.dimension == 1 ? run_dim<1>(scene, options, threads, open, start)
+                                : run_dim<2>(scene, options, threads, open, start);
+  });
 }
 
 }  // namespace mpm

@@ -28,4 +28,9 @@ struct RunResult {
 /// state saved; a scene it cannot run (e.g. dt above the critical step) is status 2 before any work.
 RunResult run_scene(const Scene& scene, const RunOptions& options);
 
+/// Continues the run recorded in `path` (its .partial file if the run was killed) from its last checkpoint, into
+/// the same file, with the scene stored there. Status 2 if the file has no usable checkpoint. The result is
+/// bitwise the run that was never interrupted.
+RunResult resume_run(const std::string& path, const RunOptions& options);
+
 }  // namespace mpm

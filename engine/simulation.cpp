@@ -252,7 +252,15 @@ Simulation<Dim>::Simulation(const Scene& scene)
   // time step: given, or a fraction of the critical step h_min / c of the stiffest body
   double h_min = 1e300, c_max = 0.0;
   for (int d = 0; d < Dim; ++d) h_min = std::min(h_min, scene.grid.length[d] / scene.grid.cells[d]);
-  for (const auto& b : problem_->bodies()) c_max = std::max(c_max, wave_speed(b.material));
+  const auto bodies = problem_->bodies();
+  for (std::size_t b = 0; b < bodies.size(); ++b) {
+    const MaterialSpec& m = bodies[b].material;
+    // one constitutive law per run (resolved once per step); bodies may differ in density only
+    if (m.model != scene.material.model || m.E != scene.material.E || m.nu != scene.material.nu)
+      throw SceneError("scene: bodies." + std::to_string(b) +
+                       ".material: expected the scene's model, E and nu (bodies may differ in density only)");
+    c_max = std::max(c_max, wave_speed(m));
+  }
   const double dt_critical = h_min / c_max;
   if (scene.time.cfl) {
     dt_ = *scene.time.cfl * dt_critical;
@@ -316,9 +324,33 @@ template <int Dim>
 Simulation<Dim>::~Simulation() = default;
 
 template <int Dim>
-void Simulation<Dim>::restore_clock(long step, double time) {
-  step_ = step;
-  time_ = time;
+SimulationState Simulation<Dim>::save_state() const {
+  SimulationState st{step_, time_, conservation_, store_.column_names(), {}};
+  for (const auto& name : st.names) {
+    const auto c = store_.column(name);
+    st.columns.emplace_back(c.begin(), c.end());
+  }
+  return st;
+}
+
+template <int Dim>
+void Simulation<Dim>::load_state(const SimulationState& st) {
+  // columns are matched by name (a file may list them in another order); all must be there, with every particle
+  const auto names = store_.column_names();
+  std::vector<std::size_t> source(names.size());
+  for (std::size_t k = 0; k < names.size(); ++k) {
+    const auto it = std::find(st.names.begin(), st.names.end(), names[k]);
+    if (it == st.names.end()) throw std::invalid_argument("state: column " + names[k] + " is missing");
+    source[k] = it - st.names.begin();
+    if (st.columns[source[k]].size() != store_.size())
+      throw std::invalid_argument("state: column " + names[k] + " has " + std::to_string(st.columns[source[k]].size()) +
+                                  " values, this scene has " + std::to_string(store_.size()) + " particles");
+  }
+  for (std::size_t k = 0; k < names.size(); ++k)
+    std::copy(st.columns[source[k]].begin(), st.columns[source[k]].end(), store_.column(names[k]).begin());
+  step_ = st.step;
+  time_ = st.time;
+  conservation_ = st.conservation;
 }
 
 template <int Dim>
@@ -601,6 +633,33 @@ RunErrors Simulation<Dim>::errors() const {
       for (int b = 0; b < Dim; ++b) es += std::pow(sig[sym_index<Dim>(a, b)][p] - ex.sigma[a * Dim + b], 2);
   }
   return {std::sqrt(eu / n), std::sqrt(ev / n), std::sqrt(es / n)};
+}
+
+template <int Dim>
+double Simulation<Dim>::critical_dt() const {
+  const auto& s = store_;
+  const auto m = s.column(Field::mass);
+  const auto V0 = s.column(Field::volume0);
+  double h_min = 1e300;
+  for (int d = 0; d < Dim; ++d) h_min = std::min(h_min, scene_.grid.length[d] / scene_.grid.cells[d]);
+  const double speed = std::visit(
+      [&](const auto& mat) {
+        return tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, s.size(), 4096), 0.0,
+            [&](const tbb::blocked_range<std::size_t>& r, double acc) {
+              for (std::size_t p = r.begin(); p < r.end(); ++p) {
+                double F[Dim * Dim], v2 = 0;
+                for (int c = 0; c < Dim * Dim; ++c) F[c] = s.column(Field::deformation, c)[p];
+                for (int d = 0; d < Dim; ++d) v2 += std::pow(s.column(Field::velocity, d)[p], 2);
+                const double J = Dim == 1 ? F[0] : F[0] * F[3] - F[1] * F[2];
+                acc = std::max(acc, mat.wave_speed(J, m[p] / V0[p]) + std::sqrt(v2));
+              }
+              return acc;
+            },
+            [](double a, double b) { return std::max(a, b); });
+      },
+      material_);
+  return h_min / speed;
 }
 
 template <int Dim>

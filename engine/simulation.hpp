@@ -59,6 +59,16 @@ struct GridState {
   GridView<Dim> view();
 };
 
+/// Everything that determines the rest of a run: particle columns (in storage order), clock and the running
+/// conservation maxima. Restoring it and stepping on gives bitwise the same result as never having stopped.
+struct SimulationState {
+  long step = 0;
+  double time = 0.0;
+  Conservation conservation;
+  std::vector<std::string> names;
+  std::vector<std::vector<double>> columns;
+};
+
 template <int Dim>
 class Simulation {
  public:
@@ -86,11 +96,15 @@ class Simulation {
   bool has_exact() const { return problem_->has_exact(); }
   RunErrors errors() const;
   Energy energy() const;
+  /// The largest stable time step for the current state: h_min / max_p (c(J_p) + |v_p|), with c the tangent
+  /// P-wave speed of the material at the particle's J (neo-Hookean stiffens under compression).
+  double critical_dt() const;
   /// CG iterations of the consistent-mass solves in the last step (0 for lumped mass).
   int last_cg_iterations() const { return cg_iterations_; }
 
-  /// Restores time and step counter (checkpoint resume); the particle columns are set through particles().
-  void restore_clock(long step, double time);
+  SimulationState save_state() const;
+  /// Restores a state of this scene; throws std::invalid_argument if its columns do not match this run's.
+  void load_state(const SimulationState& state);
 
  private:
   template <class B, class M, class F>
