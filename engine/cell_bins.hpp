@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <span>
+#include <type_traits>
 #include <vector>
 
 #include <tbb/blocked_range.h>
@@ -34,14 +35,20 @@ class CellBins {
   int block_width() const { return block_width_; }
   std::size_t blocks() const { return block_begin_.size() - 1; }
 
-  /// Calls f(begin, end) for every block's range of order(), colour after colour, blocks of one colour in parallel.
+  /// Calls f(begin, end) — or f(block, begin, end) — for every non-empty block's range of order(), colour after
+  /// colour, blocks of one colour in parallel. Block indices run over [0, blocks()).
   template <class F>
   void for_each_block_coloured(F&& f) const {
     for (int c = 0; c < (1 << Dim); ++c)
       tbb::parallel_for(tbb::blocked_range<std::size_t>(colour_begin_[c], colour_begin_[c + 1], 1),
                         [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t b = r.begin(); b < r.end(); ++b)
-                            if (block_begin_[b] < block_begin_[b + 1]) f(block_begin_[b], block_begin_[b + 1]);
+                          for (std::size_t b = r.begin(); b < r.end(); ++b) {
+                            if (block_begin_[b] == block_begin_[b + 1]) continue;
+                            if constexpr (std::is_invocable_v<F, std::size_t, std::size_t, std::size_t>)
+                              f(b, block_begin_[b], block_begin_[b + 1]);
+                            else
+                              f(block_begin_[b], block_begin_[b + 1]);
+                          }
                         });
   }
 

@@ -16,6 +16,7 @@
 #include "engine/problem.hpp"
 #include "engine/scene.hpp"
 #include "kernels/stencil.hpp"
+#include "kernels/transfer.hpp"
 
 namespace mpm {
 
@@ -133,6 +134,7 @@ class Simulation {
   long step_ = 0, steps_total_ = 0;
   int cg_iterations_ = 0;
   std::array<std::vector<double>, Dim> cg_r_, cg_z_, cg_p_, cg_Ap_, cg_x_;
+  std::vector<MomentumTotals<Dim>> block_momentum_;  ///< particle momentum per block, from the last momentum scatter
 };
 
 extern template class Simulation<1>;

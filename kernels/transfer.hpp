@@ -39,11 +39,29 @@ inline double det(const ParticleView<Dim>& p, std::size_t i) {
   else return p.F[0][i] * p.F[3][i] - p.F[1][i] * p.F[2][i];
 }
 
-/// P2G over particles order[begin..end): adds the selected sums into the grid. `totals` (if not null) receives
-/// Σ m_p v_p and Σ m_p |v_p| of these particles, for the conservation check.
+/// Particle momentum of a range, Σ m_p v_p and Σ m_p |v_p|, summed as the scatter goes: the conservation check
+/// then needs no pass of its own.
+template <int Dim>
+struct MomentumTotals {
+  std::array<double, Dim> mv{};
+  double m_abs_v = 0.0;
+  void add(double m, const double* v) {
+    double v2 = 0.0;
+    for (int d = 0; d < Dim; ++d) {
+      mv[d] += m * v[d];
+      v2 += v[d] * v[d];
+    }
+    m_abs_v += m * std::sqrt(v2);
+  }
+};
+
+/// P2G over particles order[begin..end): adds the selected sums into the grid; returns the particle momentum of
+/// the range when momentum is scattered.
 template <ScatterFields Fields, int Dim, int S, class Axis, class Body>
-inline void scatter_p2g(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p, const GridView<Dim>& g,
-                        const unsigned* order, std::size_t begin, std::size_t end, const Body& body) {
+inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p,
+                                       const GridView<Dim>& g, const unsigned* order, std::size_t begin,
+                                       std::size_t end, const Body& body) {
+  MomentumTotals<Dim> totals;
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
     double xp[Dim];
@@ -51,8 +69,14 @@ inline void scatter_p2g(const TensorBasis<Dim, Axis>& basis, const ParticleView<
     const auto st = stencil_at<Dim, S>(basis, xp);
     const double mp = p.m[ip];
     double mv[Dim] = {};
-    if constexpr (Fields.momentum)
-      for (int d = 0; d < Dim; ++d) mv[d] = mp * p.v[d][ip];
+    if constexpr (Fields.momentum) {
+      double vp[Dim];
+      for (int d = 0; d < Dim; ++d) {
+        vp[d] = p.v[d][ip];
+        mv[d] = mp * vp[d];
+      }
+      totals.add(mp, vp);
+    }
     double Vsig[Dim][Dim] = {};  // V_p σ_p
     double mb[Dim] = {};         // m_p b_p
     if constexpr (Fields.force) {
@@ -76,6 +100,40 @@ inline void scatter_p2g(const TensorBasis<Dim, Axis>& basis, const ParticleView<
         }
     });
   }
+  return totals;
+}
+
+/// MUSL steps 6–7 fused (thesis eqs 2.47–2.48): v_p += Δt Σ_i φ_i a_i, then q_i += φ_i m_p v_p, for particles
+/// order[begin..end) of one coloured block. One pass instead of a gather and a scatter: the grid accelerations
+/// are only read, the momenta only written by this block's colour.
+template <int Dim, int S, class Axis>
+inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<Dim, Axis>& basis,
+                                                             const ParticleView<Dim>& p, const GridView<Dim>& g,
+                                                             const unsigned* order, std::size_t begin,
+                                                             std::size_t end, double dt) {
+  MomentumTotals<Dim> totals;
+  for (std::size_t k = begin; k < end; ++k) {
+    const std::size_t ip = order[k];
+    double xp[Dim];
+    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
+    const auto st = stencil_at<Dim, S>(basis, xp);
+    double ap[Dim] = {};
+    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>&) {
+      for (int d = 0; d < Dim; ++d) ap[d] += w * g.a[d][i];
+    });
+    const double mp = p.m[ip];
+    double vp[Dim], mv[Dim];
+    for (int d = 0; d < Dim; ++d) {
+      vp[d] = p.v[d][ip] + dt * ap[d];
+      p.v[d][ip] = vp[d];
+      mv[d] = mp * vp[d];
+    }
+    totals.add(mp, vp);
+    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>&) {
+      for (int d = 0; d < Dim; ++d) g.q[d][i] += w * mv[d];
+    });
+  }
+  return totals;
 }
 
 /// G2P over particles [begin, end): the selected updates; `stress(F, s)` is the constitutive law (σ from F).
