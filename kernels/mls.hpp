@@ -7,8 +7,8 @@
 // The basis is shifted to x and scaled by the kernel width, p̃(x_p) = [1, (x_p − x)/(support h)], which spans
 // the same space (so the value is the same) but keeps A well conditioned on any grid; then p̃(x) = e_1 and the
 // value is the first row of A⁻¹ B U. A singular A (fewer than Dim+1 samples in the support, or all of them on a
-// line) is detected by the pivoted QR and the value falls back to the Shepard estimate Σ w u / Σ w (degree 0),
-// counted as FitStage::constant; no sample in the support gives zero, counted as FitStage::empty.
+// line) is detected by the pivoted factorisation and the value falls back to the Shepard estimate Σ w u / Σ w
+// (degree 0), counted as FitStage::constant; no sample in the support gives zero, counted as FitStage::empty.
 //
 // Structure worth knowing (Tesserae.jl, wls.jl): for a B-spline weight whose support is fully covered by
 // uniformly spaced particles, A is the same constant matrix at every x (diagonal, since the weight is even), so
@@ -56,18 +56,18 @@ inline MlsValue<S::fields> mls_value(const Vec<S::dim>& x, const Vec<S::dim>& h,
   Eigen::Matrix<double, N, N> A = Eigen::Matrix<double, N, N>::Zero();  // eq. 10
   Eigen::Matrix<double, N, K> BU = Eigen::Matrix<double, N, K>::Zero(); // eqs 11–12: B U
   std::size_t points = 0;
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    const Vec<Dim> r = (x - samples.position(i)).cwiseProduct(inv_width);  // eq. 16 text
-    double w = samples.weight(i);
-    for (int d = 0; d < Dim; ++d) w *= quadratic_spline_weight(r[d]);     // eq. 16
-    if (w == 0.0) continue;
+  samples.for_each([&](const Vec<Dim>& xp, const Eigen::Matrix<double, K, 1>& u, double weight) {
+    const Vec<Dim> r = (x - xp).cwiseProduct(inv_width);         // eq. 16 text
+    double w = weight;
+    for (int d = 0; d < Dim; ++d) w *= quadratic_spline_weight(r[d]);  // eq. 16
+    if (w == 0.0) return;
     Eigen::Matrix<double, N, 1> p;
     p[0] = 1.0;
     p.template tail<Dim>() = -r;  // p̃(x_p) = [1, (x_p − x)/(support h)]
     A.noalias() += (w * p) * p.transpose();
-    BU.noalias() += (w * p) * samples.value(i).transpose();
+    BU.noalias() += (w * p) * u.transpose();
     ++points;
-  }
+  });
   MlsValue<K> out;
   out.status.points = points;
   Eigen::Matrix<double, N, K> a;

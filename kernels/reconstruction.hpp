@@ -25,17 +25,25 @@ struct CellBox {
   double volume() const { return (hi - lo).prod(); }      ///< |Ω_e|, thesis eq. 6.7
 };
 
-/// Scattered samples as a reconstruction reads them: sample i has a position, K field values and a
-/// least-squares weight (1 for the thesis' and the paper's unweighted sums). A particle range sorted by cell,
-/// with values computed on the fly (ρ_p = m_p / V_p, ρ_p v_p, σ_p, …), satisfies this with a few lines.
+/// Scattered samples as a reconstruction reads them: size() and a visit of every sample in a fixed order,
+/// f(position, values, weight), with K = S::fields values and a least-squares weight (1 for the thesis' and the
+/// paper's unweighted sums). A visitor, not random access, so that a source can be several ranges of a
+/// cell-sorted particle order (a cell and its neighbours) and compute values on the fly, e.g.
+///
+///   struct CellParticles {                      // ρ, ρv_x, ρv_y of the particles order[b..e) in 2D
+///     static constexpr int dim = 2, fields = 3;
+///     std::size_t size() const { return e - b; }
+///     template <class F> void for_each(F&& f) const {
+///       for (auto k = b; k < e; ++k) { auto p = order[k]; double rho = m[p] / V[p];
+///         f(Vec<2>(x0[p], x1[p]), Eigen::Vector3d(rho, rho * v0[p], rho * v1[p]), 1.0); } }
+///     ...
+///   };
 template <class S>
-concept SampleSource = requires(const S& s, std::size_t i) {
+concept SampleSource = requires(const S& s) {
   { S::dim } -> std::convertible_to<int>;
   { S::fields } -> std::convertible_to<int>;
   { s.size() } -> std::convertible_to<std::size_t>;
-  { s.position(i) } -> std::convertible_to<Vec<S::dim>>;
-  { s.value(i) } -> std::convertible_to<Eigen::Matrix<double, S::fields, 1>>;
-  { s.weight(i) } -> std::convertible_to<double>;
+  s.for_each([](const Vec<S::dim>&, const Eigen::Matrix<double, S::fields, 1>&, double) {});
 };
 
 /// Samples stored column-wise (SoA), optionally through an index list (e.g. a cell's range of the sort order).
@@ -50,18 +58,17 @@ struct SoaSamples {
   std::size_t count = 0;
 
   std::size_t size() const { return count; }
-  std::size_t row(std::size_t i) const { return index ? index[i] : i; }
-  Vec<Dim> position(std::size_t i) const {
-    Vec<Dim> p;
-    for (int d = 0; d < Dim; ++d) p[d] = x[d][row(i)];
-    return p;
+  template <class F>
+  void for_each(F&& visit) const {
+    for (std::size_t i = 0; i < count; ++i) {
+      const std::size_t r = index ? index[i] : i;
+      Vec<Dim> p;
+      for (int d = 0; d < Dim; ++d) p[d] = x[d][r];
+      Eigen::Matrix<double, K, 1> v;
+      for (int k = 0; k < K; ++k) v[k] = f[k][r];
+      visit(p, v, w ? w[r] : 1.0);
+    }
   }
-  Eigen::Matrix<double, K, 1> value(std::size_t i) const {
-    Eigen::Matrix<double, K, 1> v;
-    for (int k = 0; k < K; ++k) v[k] = f[k][row(i)];
-    return v;
-  }
-  double weight(std::size_t i) const { return w ? w[row(i)] : 1.0; }
 };
 
 /// No samples (e.g. "no neighbour particles supplied").
@@ -70,9 +77,8 @@ struct NoSamples {
   static constexpr int dim = Dim;
   static constexpr int fields = K;
   std::size_t size() const { return 0; }
-  Vec<Dim> position(std::size_t) const { return Vec<Dim>::Zero(); }
-  Eigen::Matrix<double, K, 1> value(std::size_t) const { return Eigen::Matrix<double, K, 1>::Zero(); }
-  double weight(std::size_t) const { return 0.0; }
+  template <class F>
+  void for_each(F&&) const {}
 };
 
 /// Which stage of the fixed completion order produced a fit (DESIGN.md "Per-cell solves"):
@@ -122,23 +128,27 @@ struct FallbackCounts {
 namespace detail {
 
 /// Solves the symmetric positive semi-definite normal system D x = r (N unknowns, K right-hand sides) if D has
-/// full rank; returns false without touching x otherwise. Rank is decided by a column-pivoted Householder QR of
-/// the Jacobi-equilibrated matrix S D S (S = diag(D_ii^{-1/2})), a pivot counting as zero below `threshold`
-/// times the largest one. The equilibration makes the test independent of the scaling of the basis functions
-/// and of the sample weights; since D = Bᵀ W B, a relative threshold τ on D is √τ on the singular values of the
-/// sample matrix B (τ = 1e-10: columns dependent to 1e-5 count as dependent). Never detected afterwards by NaN.
+/// full rank; returns false without touching x otherwise. Rank is decided by a fully pivoted LU of the
+/// Jacobi-equilibrated matrix S D S (S = diag(D_ii^{-1/2})), a pivot counting as zero below `threshold` times
+/// the largest one. On a semi-definite matrix the largest entry is on the diagonal and every Schur complement
+/// stays semi-definite, so full pivoting is diagonal pivoting — a pivoted Cholesky, rank-revealing for such
+/// matrices. The equilibration makes the test independent of the scaling of the basis functions and of the
+/// sample weights; since D = Bᵀ W B, a relative threshold τ on D is √τ on the singular values of the sample
+/// matrix B (τ = 1e-10: columns dependent to 1e-5 count as dependent). Never detected afterwards by NaN.
+/// (ColPivHouseholderQR works as well, but its solve instantiates Eigen's blocked-Householder path, which makes
+/// g++ 12 emit a spurious -Wmaybe-uninitialized inside Eigen.)
 template <int N, int K, class DerivedD, class DerivedR>
 inline bool solve_full_rank(const Eigen::MatrixBase<DerivedD>& D, const Eigen::MatrixBase<DerivedR>& r,
                             double threshold, Eigen::Matrix<double, N, K>& x) {
   Eigen::Matrix<double, N, 1> s;
   for (int i = 0; i < N; ++i) s[i] = D(i, i) > 0.0 ? 1.0 / std::sqrt(D(i, i)) : 0.0;  // zero column: rank < N
   const Eigen::Matrix<double, N, N> Ds = s.asDiagonal() * D * s.asDiagonal();
-  Eigen::ColPivHouseholderQR<Eigen::Matrix<double, N, N>> qr;
-  qr.setThreshold(threshold);
-  qr.compute(Ds);
-  if (qr.rank() < N) return false;
+  Eigen::FullPivLU<Eigen::Matrix<double, N, N>> lu;
+  lu.setThreshold(threshold);
+  lu.compute(Ds);
+  if (lu.rank() < N) return false;
   const Eigen::Matrix<double, N, K> rs = s.asDiagonal() * r;
-  x = s.asDiagonal() * qr.solve(rs);
+  x = s.asDiagonal() * lu.solve(rs);
   return true;
 }
 

@@ -8,9 +8,9 @@
 // squares, §5.3.1 "standard least-squares approach") serves the stress and the body force.
 //
 // Rank deficiency (too few or badly placed samples: thesis Fig. 5.5 in 1D, §6.3.1 in 2D where runs crashed) is
-// detected from a pivoted QR of the normal matrix, and the fit is completed in a fixed order, each step counted:
-// neighbour samples (thesis §5.2.3, Fig. 5.7) → lower degree (§5.2.3) → constant. The constrained fit keeps
-// c_0 from the integral in every stage, so it is conservative whatever happens.
+// detected from a pivoted factorisation of the normal matrix, and the fit is completed in a fixed order, each
+// step counted: neighbour samples (thesis §5.2.3, Fig. 5.7) → lower degree (§5.2.3) → constant. The constrained
+// fit keeps c_0 from the integral in every stage, so it is conservative whatever happens.
 //
 // Coefficient index k = 0..N−1 here is the thesis' ψ_{k+1}. Bases are hierarchical: degree d uses the first
 // taylor_size(d) functions of degree d+1, so a lower-degree fit is a leading block of the same normal system.
@@ -110,23 +110,29 @@ struct TlsOptions {
 namespace detail {
 
 /// Normal equations of one cell, thesis eqs 5.1–5.4 with weights: D = Σ w ψ ψᵀ, b = Σ w ψ (f − shift)ᵀ.
-/// The shift (c_0 for the constrained fit, a sample value otherwise) keeps b free of cancellation when a field
-/// has a large mean and small variation (momentum of a translating body).
+/// The shift (c_0 for the constrained fit; the first sample's values otherwise) keeps b free of cancellation
+/// when a field has a large mean and small variation (momentum of a translating body); it is added back to c_0.
 template <int Dim, int Degree, int K>
 struct TaylorNormalSystem {
   static constexpr int N = taylor_size<Dim>(Degree);
   Eigen::Matrix<double, N, N> D = Eigen::Matrix<double, N, N>::Zero();
   Eigen::Matrix<double, N, K> b = Eigen::Matrix<double, N, K>::Zero();
+  Eigen::Matrix<double, K, 1> shift = Eigen::Matrix<double, K, 1>::Zero();
+  bool shift_set = false;
   std::size_t points = 0;
 
   template <SampleSource S>
-  void add(const TaylorFrame<Dim>& fr, const S& s, const Eigen::Matrix<double, K, 1>& shift, double scale) {
-    for (std::size_t i = 0; i < s.size(); ++i) {
-      const TaylorVector<Dim, Degree> psi = taylor_basis_ref<Dim, Degree>(fr.xi(s.position(i)));
-      const double w = scale * s.weight(i);
+  void add(const TaylorFrame<Dim>& fr, const S& s, double scale) {
+    s.for_each([&](const Vec<Dim>& x, const Eigen::Matrix<double, K, 1>& f, double weight) {
+      if (!shift_set) {
+        shift = f;
+        shift_set = true;
+      }
+      const TaylorVector<Dim, Degree> psi = taylor_basis_ref<Dim, Degree>(fr.xi(x));
+      const double w = scale * weight;
       D.noalias() += (w * psi) * psi.transpose();
-      b.noalias() += (w * psi) * (s.value(i) - shift).transpose();
-    }
+      b.noalias() += (w * psi) * (f - shift).transpose();
+    });
     points += s.size();
   }
 
@@ -152,60 +158,60 @@ struct TaylorNormalSystem {
   }
 };
 
-/// The completion order shared by the constrained and the unconstrained fit. `shift` is added back to c_0.
-template <bool Constrained, int Degree, int Dim, int K, SampleSource Own, SampleSource Nb>
+/// The completion order shared by the constrained (c_0 given) and the unconstrained fit (c_0 = nullptr).
+template <int Degree, int Dim, int K, SampleSource Own, SampleSource Nb>
 inline TaylorFit<Dim, Degree, K> taylor_fit(const CellBox<Dim>& cell, const Own& own, const Nb& neighbours,
-                                            const Eigen::Matrix<double, K, 1>& shift, const TlsOptions& opt) {
+                                            const Eigen::Matrix<double, K, 1>* c0, const TlsOptions& opt) {
   static_assert(Own::dim == Dim && Nb::dim == Dim, "sample dimension must match the cell");
   static_assert(Own::fields == K && Nb::fields == K, "sample field count must match");
-  using System = TaylorNormalSystem<Dim, Degree, K>;
   TaylorFit<Dim, Degree, K> fit;
   fit.cell = cell;
   const TaylorFrame<Dim> fr(cell);
-  System sys;
-  sys.add(fr, own, shift, 1.0);
+  TaylorNormalSystem<Dim, Degree, K> sys;
+  if (c0) {
+    sys.shift = *c0;
+    sys.shift_set = true;
+  }
+  sys.add(fr, own, 1.0);
   // Own-sample constant for the unconstrained constant stage: Σ w (f − shift) / Σ w over the cell's samples.
   const double own_w = sys.D(0, 0);
   const Eigen::Matrix<double, K, 1> own_b = sys.b.row(0).transpose();
 
   auto done = [&](FitStage stage, int degree) {
-    fit.c.row(0) += shift.transpose();
+    fit.c.row(0) += sys.shift.transpose();
     fit.status = {stage, degree, sys.points};
     return fit;
   };
+  auto solve = [&]<int Deg>() {
+    return c0 ? sys.template solve<Deg, true>(opt, fit.c) : sys.template solve<Deg, false>(opt, fit.c);
+  };
 
   // 1. The cell's own samples at the requested degree.
-  if (sys.template solve<Degree, Constrained>(opt, fit.c)) return done(FitStage::full, Degree);
+  if (solve.template operator()<Degree>()) return done(FitStage::full, Degree);
   // 2. (a) add the neighbour samples (thesis §5.2.3, Fig. 5.7), same degree.
   if (neighbours.size() > 0) {
-    sys.add(fr, neighbours, shift, opt.neighbour_weight);
-    if (sys.template solve<Degree, Constrained>(opt, fit.c)) return done(FitStage::neighbour, Degree);
+    sys.add(fr, neighbours, opt.neighbour_weight);
+    if (solve.template operator()<Degree>()) return done(FitStage::neighbour, Degree);
   }
   // 3. (b) lower the degree (thesis §5.2.3: "reducing the number of basis functions"), neighbours kept.
   if constexpr (Degree >= 2) {
     static_assert(Degree == 2, "Taylor degree 0, 1 or 2");
-    if (sys.template solve<1, Constrained>(opt, fit.c)) return done(FitStage::degree, 1);
+    if (solve.template operator()<1>()) return done(FitStage::degree, 1);
   }
-  // 4. (c) constant. Constrained: c_0 from the integral (already the shift). Unconstrained: weighted mean of the
+  // 4. (c) constant. Constrained: c_0 from the integral (it is the shift). Unconstrained: weighted mean of the
   //    cell's own samples, or of the neighbours when the cell has none; zero when there is nothing at all.
   fit.c.setZero();
-  if constexpr (!Constrained) {
+  if (!c0) {
     if (own_w > 0.0) {
       fit.c.row(0) = (own_b / own_w).transpose();
     } else if (sys.D(0, 0) > 0.0) {
       fit.c.row(0) = sys.b.row(0) / sys.D(0, 0);
     } else {
       fit.status = {FitStage::empty, 0, 0};
-      return fit;  // no sample: zero (the shift is zero then)
+      return fit;  // no sample: zero
     }
   }
   return done(FitStage::constant, 0);
-}
-
-template <SampleSource S>
-inline Eigen::Matrix<double, S::fields, 1> first_value(const S& s) {
-  return s.size() > 0 ? Eigen::Matrix<double, S::fields, 1>(s.value(0))
-                      : Eigen::Matrix<double, S::fields, 1>::Zero();
 }
 
 }  // namespace detail
@@ -219,7 +225,7 @@ inline TaylorFit<Dim, Degree, K> reconstruct_tls(const CellBox<Dim>& cell, const
                                                  const Eigen::Matrix<double, K, 1>& integral,
                                                  const TlsOptions& opt = {}) {
   const Eigen::Matrix<double, K, 1> c0 = integral / cell.volume();  // thesis eq. 5.9
-  return detail::taylor_fit<true, Degree>(cell, own, neighbours, c0, opt);
+  return detail::taylor_fit<Degree>(cell, own, neighbours, &c0, opt);
 }
 
 /// Unconstrained least squares in the Taylor basis (thesis §5.3.1, eq. 5.12: stress; paper eq. 20: body force):
@@ -227,8 +233,8 @@ inline TaylorFit<Dim, Degree, K> reconstruct_tls(const CellBox<Dim>& cell, const
 template <int Degree, int Dim, SampleSource Own, SampleSource Nb>
 inline TaylorFit<Dim, Degree, Own::fields> reconstruct_ls(const CellBox<Dim>& cell, const Own& own,
                                                           const Nb& neighbours, const TlsOptions& opt = {}) {
-  const auto shift = own.size() > 0 ? detail::first_value(own) : detail::first_value(neighbours);
-  return detail::taylor_fit<false, Degree>(cell, own, neighbours, shift, opt);
+  return detail::taylor_fit<Degree>(cell, own, neighbours,
+                                    static_cast<const Eigen::Matrix<double, Own::fields, 1>*>(nullptr), opt);
 }
 
 }  // namespace mpm
