@@ -38,7 +38,7 @@ std::pair<std::vector<double>, std::vector<double>> dense(const KnotVector& kv, 
 
 }  // namespace
 
-TEST_CASE("Cox-de Boor: partition of unity, non-negativity, boundary interpolation", "[bspline]") {
+TEST_CASE("Cox-de Boor: partition of unity - non-negativity - boundary interpolation", "[bspline]") {
   for (int p = 1; p <= 4; ++p)
     for (int cells : {1, 2, 3, 7, 16}) {
       const auto kv = KnotVector::open_uniform(p, cells, 2.5);
@@ -143,14 +143,14 @@ void check_fast_equals_generic(int cells, double length, int count) {
   REQUIRE(worst <= 1e-13 + 4 * std::numeric_limits<double>::epsilon() * cells);
 }
 
-TEST_CASE("fast path equals Cox-de Boor to 1e-13 at 1e5 points, every span, 1D", "[bspline][fast]") {
+TEST_CASE("fast path equals Cox-de Boor to 1e-13 at 1e5 points - every span - 1D", "[bspline][fast]") {
   for (int cells : {1, 2, 3, 5, 64, 1000}) {
     check_fast_equals_generic<2>(cells, 1.7, 100000);
     check_fast_equals_generic<3>(cells, 1.7, 100000);
   }
 }
 
-TEST_CASE("fast path equals Cox-de Boor to 1e-13 at 1e5 points, 2D tensor product", "[bspline][fast]") {
+TEST_CASE("fast path equals Cox-de Boor to 1e-13 at 1e5 points - 2D tensor product", "[bspline][fast]") {
   const int c0 = 7, c1 = 3;
   TensorBasis<2, UniformAxis<3>> fast{{UniformAxis<3>(c0, 1.0), UniformAxis<3>(c1, 0.5)}, {c0 + 2, c1 + 2}};
   TensorBasis<2, CoxDeBoorAxis<3>> generic{

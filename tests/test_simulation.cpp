@@ -50,7 +50,7 @@ TEST_CASE("a 1D bar without body force allocates only 1D columns and runs no bod
   CHECK_FALSE(contains(sim.pipeline(), "grid-velocity-cg"));  // lumped mass: no consistent-mass solver
 }
 
-TEST_CASE("the plate stores reference positions and runs the body force; a user scene without an exact solution "
+TEST_CASE("the plate stores reference positions and runs the body force - a user scene without an exact solution "
           "stores none",
           "[simulation]") {
   Simulation<2> plate(parse_scene(plate_scene(8)));

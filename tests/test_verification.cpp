@@ -34,7 +34,7 @@ void require_conserved(const Conservation& c) {
 
 }  // namespace
 
-TEST_CASE("vibrating bar, MPM-P1, MUSL: displacement order 2, stress order 1 (thesis Fig 5.9a)",
+TEST_CASE("vibrating bar - MPM-P1 - MUSL: displacement order 2 - stress order 1 (thesis Fig 5.9a)",
           "[verification][bar]") {
   const BarResult r10 = run_bar(10, "linear", "lumped"), r20 = run_bar(20, "linear", "lumped"),
                   r40 = run_bar(40, "linear", "lumped");
@@ -48,7 +48,7 @@ TEST_CASE("vibrating bar, MPM-P1, MUSL: displacement order 2, stress order 1 (th
   CHECK(order(r20.errors.stress_rms, r40.errors.stress_rms) >= 0.9);
 }
 
-TEST_CASE("vibrating bar, quadratic B-splines with the consistent-mass projection: orders 3 (u) and 2 (sigma)",
+TEST_CASE("vibrating bar - quadratic B-splines with the consistent-mass projection: orders 3 (u) and 2 (sigma)",
           "[verification][bar]") {
   const BarResult r10 = run_bar(10, "bspline2", "projection"), r20 = run_bar(20, "bspline2", "projection"),
                   r40 = run_bar(40, "bspline2", "projection");
@@ -62,7 +62,7 @@ TEST_CASE("vibrating bar, quadratic B-splines with the consistent-mass projectio
   CHECK(order(r20.errors.stress_rms, r40.errors.stress_rms) >= 1.8);
 }
 
-TEST_CASE("vibrating bar, quadratic B-splines with lumped mass: the boundary defect (thesis Fig 5.10)",
+TEST_CASE("vibrating bar - quadratic B-splines with lumped mass: the boundary defect (thesis Fig 5.10)",
           "[verification][bar]") {
   // On an open knot vector the lumped projection q_i/m_i does not reproduce linear fields in the boundary spans:
   // the stress error at the end particles does not decrease with refinement, and the overall stress order
@@ -77,7 +77,7 @@ TEST_CASE("vibrating bar, quadratic B-splines with lumped mass: the boundary def
   CHECK(p40.end_stress_error < 0.1 * r40.end_stress_error);
 }
 
-TEST_CASE("vibrating bar, USL and USF converge like MUSL with P1 (displacement order 2)", "[verification][bar]") {
+TEST_CASE("vibrating bar - USL and USF converge like MUSL with P1 (displacement order 2)", "[verification][bar]") {
   for (const char* update : {"usl", "usf"}) {
     const BarResult r10 = run_bar(10, "linear", "lumped", update), r20 = run_bar(20, "linear", "lumped", update),
                     r40 = run_bar(40, "linear", "lumped", update);
@@ -89,7 +89,7 @@ TEST_CASE("vibrating bar, USL and USF converge like MUSL with P1 (displacement o
   }
 }
 
-TEST_CASE("vibrating plate, A = 0.05, T = 0.0125 s, BSMPM lumped MUSL: errors decrease 8 -> 16 -> 32 cells",
+TEST_CASE("vibrating plate - A = 0.05 - T = 0.0125 s - BSMPM lumped MUSL: errors decrease 8 -> 16 -> 32 cells",
           "[verification][plate]") {
   RunErrors e[3];
   int k = 0;
@@ -109,7 +109,7 @@ TEST_CASE("vibrating plate, A = 0.05, T = 0.0125 s, BSMPM lumped MUSL: errors de
   }
 }
 
-TEST_CASE("vibrating plate, USL with projection and consistent mass conserve and beat lumped on a coarse grid",
+TEST_CASE("vibrating plate - USL with projection and consistent mass conserve and beat lumped on a coarse grid",
           "[verification][plate]") {
   double lumped_u = 0;
   for (const char* mass : {"lumped", "projection", "consistent"}) {

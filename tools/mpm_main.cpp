@@ -12,6 +12,7 @@
 
 #include "engine/run.hpp"
 #include "engine/scene.hpp"
+#include "engine/study.hpp"
 
 namespace {
 
@@ -81,6 +82,16 @@ int main(int argc, char** argv) {
   validate->add_option("scene", scene_path, "scene file (JSON)")->required();
   validate->add_option("--set", sets, "override one scene key: KEY=VALUE");
 
+  mpm::StudyCommand study_args;
+  auto* study = app.add_subcommand("study", "run a scene over the cross product of varied keys: table + plots");
+  study->add_option("scene", study_args.scene_path, "scene file (JSON)")->required();
+  study->add_option("--vary", study_args.vary, "vary one key: KEY=V1,V2,... (split at top-level commas)")
+      ->required()->allow_extra_args(false);
+  study->add_option("--set", study_args.sets, "override one scene key: KEY=VALUE")->allow_extra_args(false);
+  study->add_option("--repeat", study_args.repeat, "runs per row; wall time is their median")->check(CLI::Range(1, 1000));
+  study->add_option("--threads", study_args.threads, "worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  study->add_option("--out", study_args.out_dir, "output directory (default: study-<scene name>)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::Success& e) {
@@ -90,24 +101,27 @@ int main(int argc, char** argv) {
     return mpm::exit_invalid;
   }
 
+  if (study->parsed()) return mpm::study_command(study_args);
+
   try {
     if (validate->parsed()) {
       const mpm::Scene scene = load_with_overrides(scene_path, sets);
       std::printf("%s: valid %dD scene\n", scene_path.c_str(), scene.dimension);
       return mpm::exit_ok;
     }
-    if (!resume.empty()) {
-      std::fprintf(stderr, "mpm: --resume: checkpoints are not available in this build\n");
+    if (resume.empty() == scene_path.empty()) {
+      std::fprintf(stderr, "mpm run: give either a scene file or --resume FILE.h5\n");
       return mpm::exit_invalid;
     }
-    if (scene_path.empty()) {
-      std::fprintf(stderr, "mpm run: a scene file is required\n");
-      return mpm::exit_invalid;
-    }
-    const mpm::Scene scene = load_with_overrides(scene_path, sets);
-    require_writable(out, "--out");
     require_writable(summary, "--summary");
-    const mpm::RunResult r = mpm::run_scene(scene, {threads, out, quiet});
+    mpm::RunResult r;
+    if (!resume.empty()) {
+      r = mpm::resume_run(resume, {threads, "", quiet});
+    } else {
+      const mpm::Scene scene = load_with_overrides(scene_path, sets);
+      require_writable(out, "--out");
+      r = mpm::run_scene(scene, {threads, out, quiet});
+    }
     if (r.status == mpm::exit_invalid) {
       std::fprintf(stderr, "%s\n", r.message.c_str());
       return r.status;
