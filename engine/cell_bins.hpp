@@ -7,6 +7,7 @@
 #include <array>
 #include <cstddef>
 #include <span>
+#include <utility>
 #include <type_traits>
 #include <vector>
 
@@ -28,6 +29,13 @@ class CellBins {
   /// After the caller permuted the particles into order(): the order becomes the identity, block ranges stay.
   void adopt_order() {
     for (std::size_t k = 0; k < order_.size(); ++k) order_[k] = static_cast<unsigned>(k);
+  }
+
+  /// The range of order() holding the particles of a block, by its row-major block index (with a block width of
+  /// 1: a cell's particles).
+  std::pair<std::size_t, std::size_t> block_range(std::size_t row_major) const {
+    const unsigned r = rank_[row_major];
+    return {block_begin_[r], block_begin_[r + 1]};
   }
 
   /// Particle indices in block order.

@@ -229,7 +229,8 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
   j["conservation"] = {{"mass_rel_max", sim.conservation().mass_rel_max},
                        {"momentum_rel_max", sim.conservation().momentum_rel_max}};
   j["energy"] = {{"initial", energy0}, {"drift_rel_max", drift_max}};
-  j["fallbacks"] = {{"neighbour", 0}, {"degree", 0}, {"constant", 0}};
+  const FallbackCounts fb = sim.fallbacks();
+  j["fallbacks"] = {{"neighbour", fb.neighbour}, {"degree", fb.degree}, {"constant", fb.constant}, {"empty", fb.empty}};
   j["pipeline"] = sim.pipeline();
   j["columns"] = sim.particles().column_names();
   j["bytes_per_particle"] = sim.particles().bytes_per_particle();

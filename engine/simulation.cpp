@@ -21,24 +21,6 @@ constexpr int reorder_every = 16;              // steps between permutations of 
 constexpr double cg_tolerance = 1e-14;         // relative residual of the consistent-mass solves
 constexpr int cg_max_iterations = 1000;
 
-/// A sum with its rounding error carried along (Neumaier): totals of many nearly equal terms, like particle
-/// masses, would otherwise drift by O(n ε) and hide the P2G round-off that the conservation check measures.
-struct CompensatedSum {
-  double sum = 0.0, error = 0.0;
-  void add(double x) {
-    const double t = sum + x;
-    error += std::abs(sum) >= std::abs(x) ? (sum - t) + x : (x - t) + sum;
-    sum = t;
-  }
-  CompensatedSum operator+(const CompensatedSum& o) const {
-    CompensatedSum r = *this;
-    r.add(o.sum);
-    r.error += o.error;
-    return r;
-  }
-  double value() const { return sum + error; }
-};
-
 /// Deterministic parallel sum of f(i) over [0, n): fixed chunks, fixed combination order, compensated.
 template <class F>
 double deterministic_sum(std::size_t n, F&& f) {
@@ -245,9 +227,8 @@ Simulation<Dim>::Simulation(const Scene& scene)
         return CellBins<Dim>(c, l, std::max(2, degree_of(scene.grid.basis)) * 2);
       }()) {
   if (scene.dimension != Dim) throw std::logic_error("Simulation: scene dimension does not match");
-  if (scene.algorithm.mapping != Mapping::direct)
-    throw SceneError("scene: algorithm.mapping = \"" + scene.source["algorithm"].value("mapping", std::string()) +
-                     "\": only \"direct\" is available in this build");
+  if (scene.algorithm.mapping == Mapping::cubic_spline)
+    throw SceneError("scene: algorithm.mapping = \"cubic-spline\": not available in this build (use direct, mls or tls)");
 
   // time step: given, or a fraction of the critical step h_min / c of the stiffest body
   double h_min = 1e300, c_max = 0.0;
@@ -316,7 +297,29 @@ Simulation<Dim>::Simulation(const Scene& scene)
     for (int d = 0; d < Dim; ++d)
       for (auto* a : {&cg_r_[d], &cg_z_[d], &cg_p_[d], &cg_Ap_[d], &cg_x_[d]}) a->assign(grid_.dofs, 0.0);
 
+  if (scene.algorithm.mapping != Mapping::direct) {
+    gauss_.emplace(scene);
+    std::array<int, Dim> c;
+    std::array<double, Dim> l;
+    for (int d = 0; d < Dim; ++d) {
+      c[d] = scene.grid.cells[d];
+      l[d] = scene.grid.length[d];
+    }
+    particle_cells_.emplace(c, l, 1);
+  }
   pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force());
+  if (gauss_) {  // every scatter reads the Gauss points, rebuilt from the particles just before it
+    const std::string rebuild = scene.algorithm.mapping == Mapping::tls ? "tls-rebuild+" : "mls-rebuild+";
+    std::vector<std::string> stages;
+    for (const auto& st : pipeline_) {
+      if (st == "g2p-velocity+p2g-momentum") {
+        stages.insert(stages.end(), {"g2p-velocity", rebuild + "p2g-momentum"});
+      } else {
+        stages.push_back(st.rfind("p2g", 0) == 0 ? rebuild + st : st);
+      }
+    }
+    pipeline_ = stages;
+  }
   // initial stress from F = I is zero for both laws
 }
 
@@ -394,19 +397,12 @@ void Simulation<Dim>::check_mass() {
 }
 
 template <int Dim>
-void Simulation<Dim>::check_momentum() {
-  // particle totals come from the scatter itself, one per block, summed here in block order (deterministic)
-  std::array<CompensatedSum, Dim> particles{};
-  CompensatedSum scale;
-  for (const auto& b : block_momentum_) {
-    for (int d = 0; d < Dim; ++d) particles[d].add(b.mv[d]);
-    scale.add(b.m_abs_v);
-  }
-  if (scale.value() == 0.0) return;
+void Simulation<Dim>::check_momentum(const MomentumTotals<Dim>& particles) {
+  if (particles.m_abs_v == 0.0) return;
   double worst = 0.0;
   for (int d = 0; d < Dim; ++d) {
     const double grid = deterministic_sum(grid_.dofs, [&](std::size_t i) { return grid_.q[d][i]; });
-    worst = std::max(worst, std::abs(grid - particles[d].value()) / scale.value());
+    worst = std::max(worst, std::abs(grid - particles.mv[d]) / particles.m_abs_v);
   }
   conservation_.momentum_rel_max = std::max(conservation_.momentum_rel_max, worst);
 }
@@ -445,10 +441,10 @@ void Simulation<Dim>::raise_unstable(std::size_t p, const char* stage) const {
 /// with the lumped mass as (Jacobi) preconditioner; M is applied matrix-free (transfer.hpp). Thesis eqs 3.9–3.10.
 template <int Dim>
 template <class B>
-void Simulation<Dim>::solve_consistent(const B& basis, std::array<std::vector<double>, Dim>& x,
+void Simulation<Dim>::solve_consistent(const B& basis, const ParticleView<Dim>& pv, const CellBins<Dim>& bins,
+                                       std::array<std::vector<double>, Dim>& x,
                                        const std::array<std::vector<double>, Dim>& rhs) {
   constexpr int S = B::width;
-  const auto pv = store_.view();
   const std::size_t n = grid_.dofs;
   auto free_dof = [&](int d, std::size_t i) { return !grid_.fixed[d][i] && grid_.m[i] > empty_mass_; };
   auto apply = [&](const std::array<std::vector<double>, Dim>& in, std::array<std::vector<double>, Dim>& out) {
@@ -459,8 +455,8 @@ void Simulation<Dim>::solve_consistent(const B& basis, std::array<std::vector<do
       xin[d] = in[d].data();
       yout[d] = out[d].data();
     }
-    const unsigned* order = bins_.order().data();
-    bins_.for_each_block_coloured([&](std::size_t b, std::size_t e) {
+    const unsigned* order = bins.order().data();
+    bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
       apply_consistent_mass<Dim, S>(basis, pv, grid_.stride1, xin, yout, order, b, e);
     });
   };
@@ -528,12 +524,34 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
   for (int d = 0; d < Dim; ++d) guard.hi[d] = scene_.grid.length[d];
 
   block_momentum_.assign(bins_.blocks(), MomentumTotals<Dim>{});
+  // P2G, direct (particles as integration points) or from the Gauss points of the reconstruction, which is
+  // rebuilt from the particles first (with stress and body force when the force is scattered)
   auto scatter = [&]<ScatterFields Fields>() {
-    bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-      const auto totals = scatter_p2g<Fields, Dim, S>(basis, pv, gv, order, b, e, body);
-      if constexpr (Fields.momentum) block_momentum_[block] = totals;
-    });
+    if (gauss_) {
+      const MomentumTotals<Dim> totals = gauss_->rebuild(pv, *particle_cells_, body, Fields.force);
+      const auto gp = gauss_->view();
+      const unsigned* gorder = gauss_->bins().order().data();
+      gauss_->bins().for_each_block_coloured([&](std::size_t b, std::size_t e) {
+        scatter_gauss<Fields, F::active, Dim, S>(basis, gp, gv, gorder, b, e);
+      });
+      if constexpr (Fields.momentum) check_momentum(totals);
+    } else {
+      bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
+        const auto totals = scatter_p2g<Fields, Dim, S>(basis, pv, gv, order, b, e, body);
+        if constexpr (Fields.momentum) block_momentum_[block] = totals;
+      });
+      if constexpr (Fields.momentum) check_momentum(sum_totals(block_momentum_));
+    }
+    if constexpr (Fields.mass) check_mass();
   };
+  if (particle_cells_) {
+    std::array<const double*, Dim> x;
+    for (int d = 0; d < Dim; ++d) x[d] = pv.x[d];
+    particle_cells_->bin(x, np);
+  }
+  // the carriers of the consistent mass: particles, or the Gauss points (thesis eq. 3.9)
+  const ParticleView<Dim> carriers = gauss_ ? gauss_->mass_view() : pv;
+  const CellBins<Dim>& carrier_bins = gauss_ ? gauss_->bins() : bins_;
   auto gather = [&]<GatherFields Fields>(const char* stage) {
     parallel_over(np, particle_grain,
                   [&](std::size_t b, std::size_t e) { gather_g2p<Fields, Dim, S>(basis, pv, gv, b, e, dt, stress, guard); });
@@ -545,7 +563,7 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
   // a = M⁻¹ f (eqs 2.34, 2.46); empty and fixed DOFs get none
   auto accelerations = [&] {
     if (consistent_a) {
-      solve_consistent(basis, grid_.a, grid_.f);
+      solve_consistent(basis, carriers, carrier_bins, grid_.a, grid_.f);
     } else {
       parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i)
@@ -557,7 +575,7 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
   // v = M⁻¹ q (eqs 2.35, 2.49; with the consistent mass, thesis eq. 3.10)
   auto velocities = [&] {
     if (consistent_v) {
-      solve_consistent(basis, grid_.v, grid_.q);
+      solve_consistent(basis, carriers, carrier_bins, grid_.v, grid_.q);
     } else {
       parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i)
@@ -577,8 +595,6 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
     case Update::usl:  // thesis Algorithm 1
       clear_grid(true, true, true);
       scatter.template operator()<ScatterFields{true, true, true}>();
-      check_mass();
-      check_momentum();
       accelerations();
       velocities();
       advance_velocities();
@@ -587,21 +603,23 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
     case Update::musl:  // thesis Algorithm 2
       clear_grid(true, false, true);
       scatter.template operator()<ScatterFields{true, false, true}>();
-      check_mass();
       accelerations();
       clear_grid(false, true, false);
-      bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-        block_momentum_[block] = advance_velocity_scatter_momentum<Dim, S>(basis, pv, gv, order, b, e, dt);
-      });
-      check_momentum();
+      if (gauss_) {
+        gather.template operator()<GatherFields{true, false, false}>("g2p-velocity");
+        scatter.template operator()<ScatterFields{false, true, false}>();
+      } else {
+        bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
+          block_momentum_[block] = advance_velocity_scatter_momentum<Dim, S>(basis, pv, gv, order, b, e, dt);
+        });
+        check_momentum(sum_totals(block_momentum_));
+      }
       velocities();
       gather.template operator()<GatherFields{false, true, true}>("g2p-position-deformation");
       break;
     case Update::usf:  // stress first, from the velocities mapped at the start of the step
       clear_grid(true, true, true);
       scatter.template operator()<ScatterFields{true, true, false}>();
-      check_mass();
-      check_momentum();
       velocities();
       gather.template operator()<GatherFields{false, false, true}>("g2p-deformation");
       scatter.template operator()<ScatterFields{false, false, true}>();

@@ -5,12 +5,14 @@
 #include <array>
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <variant>
 #include <vector>
 
 #include "engine/cell_bins.hpp"
+#include "engine/gauss_points.hpp"
 #include "engine/material.hpp"
 #include "engine/particle_store.hpp"
 #include "engine/problem.hpp"
@@ -100,6 +102,8 @@ class Simulation {
   /// The largest stable time step for the current state: h_min / max_p (c(J_p) + |v_p|), with c the tangent
   /// P-wave speed of the material at the particle's J (neo-Hookean stiffens under compression).
   double critical_dt() const;
+  /// Reconstruction fallbacks so far (all zero for direct mapping).
+  FallbackCounts fallbacks() const { return gauss_ ? gauss_->fallbacks() : FallbackCounts{}; }
   /// CG iterations of the consistent-mass solves in the last step (0 for lumped mass).
   int last_cg_iterations() const { return cg_iterations_; }
 
@@ -111,11 +115,11 @@ class Simulation {
   template <class B, class M, class F>
   void step_with(const B& basis, const M& material, const F& body, double dt);
   template <class B>
-  void solve_consistent(const B& basis, std::array<std::vector<double>, Dim>& x,
-                        const std::array<std::vector<double>, Dim>& rhs);
+  void solve_consistent(const B& basis, const ParticleView<Dim>& carriers, const CellBins<Dim>& bins,
+                        std::array<std::vector<double>, Dim>& x, const std::array<std::vector<double>, Dim>& rhs);
   void clear_grid(bool mass, bool momentum, bool force);
   void check_mass();
-  void check_momentum();
+  void check_momentum(const MomentumTotals<Dim>& particles);
   void apply_fixed(std::array<std::vector<double>, Dim>& field);
   void raise_unstable(std::size_t particle, const char* stage) const;
 
@@ -134,7 +138,9 @@ class Simulation {
   long step_ = 0, steps_total_ = 0;
   int cg_iterations_ = 0;
   std::array<std::vector<double>, Dim> cg_r_, cg_z_, cg_p_, cg_Ap_, cg_x_;
-  std::vector<MomentumTotals<Dim>> block_momentum_;  ///< particle momentum per block, from the last momentum scatter
+  std::vector<MomentumTotals<Dim>> block_momentum_;
+  std::optional<GaussPoints<Dim>> gauss_;      ///< reconstructed mappings only
+  std::optional<CellBins<Dim>> particle_cells_;  ///< particles by single cell, for the per-cell fits  ///< particle momentum per block, from the last momentum scatter
 };
 
 extern template class Simulation<1>;

@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <vector>
 
 #include "kernels/stencil.hpp"
 #include "kernels/views.hpp"
@@ -39,6 +40,24 @@ inline double det(const ParticleView<Dim>& p, std::size_t i) {
   else return p.F[0][i] * p.F[3][i] - p.F[1][i] * p.F[2][i];
 }
 
+/// A sum with its rounding error carried along (Neumaier): totals of many nearly equal terms, like particle
+/// masses, would otherwise drift by O(n ε) and hide the P2G round-off that the conservation check measures.
+struct CompensatedSum {
+  double sum = 0.0, error = 0.0;
+  void add(double x) {
+    const double t = sum + x;
+    error += std::abs(sum) >= std::abs(x) ? (sum - t) + x : (x - t) + sum;
+    sum = t;
+  }
+  CompensatedSum operator+(const CompensatedSum& o) const {
+    CompensatedSum r = *this;
+    r.add(o.sum);
+    r.error += o.error;
+    return r;
+  }
+  double value() const { return sum + error; }
+};
+
 /// Particle momentum of a range, Σ m_p v_p and Σ m_p |v_p|, summed as the scatter goes: the conservation check
 /// then needs no pass of its own.
 template <int Dim>
@@ -54,6 +73,21 @@ struct MomentumTotals {
     m_abs_v += m * std::sqrt(v2);
   }
 };
+
+/// Sum of per-block (or per-cell) totals in index order, compensated: deterministic and free of O(n ε) drift.
+template <int Dim>
+inline MomentumTotals<Dim> sum_totals(const std::vector<MomentumTotals<Dim>>& parts) {
+  std::array<CompensatedSum, Dim> mv{};
+  CompensatedSum abs_v;
+  for (const auto& b : parts) {
+    for (int d = 0; d < Dim; ++d) mv[d].add(b.mv[d]);
+    abs_v.add(b.m_abs_v);
+  }
+  MomentumTotals<Dim> r;
+  for (int d = 0; d < Dim; ++d) r.mv[d] = mv[d].value();
+  r.m_abs_v = abs_v.value();
+  return r;
+}
 
 /// P2G over particles order[begin..end): adds the selected sums into the grid; returns the particle momentum of
 /// the range when momentum is scattered.

@@ -82,6 +82,12 @@ TEST_CASE("1-thread and 2-thread runs are bitwise identical", "[simulation][para
       for (std::size_t c = 0; c < one.size(); ++c) CHECK(one[c] == two[c]);
     }
   }
+  for (const char* mapping : {"tls", "mls"}) {
+    auto scene = plate_scene(8, 0.05, "musl", "projection");
+    scene["algorithm"]["mapping"] = mapping;
+    INFO(mapping);
+    CHECK(state_after<2>(scene, 20, 1) == state_after<2>(scene, 20, 2));
+  }
   const auto bar = bar_scene(40, "bspline2", "projection");
   CHECK(state_after<1>(bar, 19, 1) == state_after<1>(bar, 19, 2));
 }

@@ -123,3 +123,62 @@ TEST_CASE("vibrating plate - USL with projection and consistent mass conserve an
     else CHECK(u < lumped_u);
   }
 }
+
+TEST_CASE("vibrating bar - BSMPM-TLS with the consistent-mass projection: orders 3 (u) and 2 (sigma) (thesis Fig 5.9c)",
+          "[verification][bar][tls]") {
+  RunErrors e[3];
+  int k = 0;
+  for (int cells : {10, 20, 40}) {
+    auto j = bar_scene(cells, "bspline2", "projection");
+    j["algorithm"]["mapping"] = "tls";
+    Simulation<1> sim(parse_scene(j));
+    run_to_end(sim);
+    require_conserved(sim.conservation());
+    e[k++] = sim.errors();
+  }
+  INFO("u: " << e[0].displacement_rms << " " << e[1].displacement_rms << " " << e[2].displacement_rms);
+  INFO("sigma: " << e[0].stress_rms << " " << e[1].stress_rms << " " << e[2].stress_rms);
+  for (int i = 0; i < 2; ++i) {
+    CHECK(order(e[i].displacement_rms, e[i + 1].displacement_rms) >= 2.7);
+    CHECK(order(e[i].stress_rms, e[i + 1].stress_rms) >= 1.8);
+  }
+}
+
+TEST_CASE("TLS conserves mass and momentum to round-off after every P2G - 1D and 2D - uniform and random layouts",
+          "[verification][tls][conservation]") {
+  for (int ppc : {1, 2, 4, 9, 16}) {
+    auto plate = plate_scene(8, 0.05);
+    plate["algorithm"]["mapping"] = "tls";
+    plate["particles"] = {{"per_cell", ppc}, {"layout", "random"}, {"seed", 7}};
+    plate["time"]["end"] = 2e-3;
+    Simulation<2> sim(parse_scene(plate));
+    run_to_end(sim);
+    INFO("2D random, " << ppc << " per cell: mass " << sim.conservation().mass_rel_max << ", momentum "
+                       << sim.conservation().momentum_rel_max);
+    require_conserved(sim.conservation());
+  }
+  for (const char* update : {"usl", "musl"}) {
+    auto bar = bar_scene(10, "bspline2", "lumped", update);
+    bar["algorithm"]["mapping"] = "tls";
+    Simulation<1> sim(parse_scene(bar));
+    run_to_end(sim);
+    require_conserved(sim.conservation());
+  }
+}
+
+TEST_CASE("vibrating plate at A = 0.1 - 32 cells - BSMPM-TLS completes (thesis 6.3.1 crashed) and conserves",
+          "[verification][plate][tls]") {
+  // Cells that lose particles near maximum compression made 2D TLS diverge; the conservative limiter of the
+  // Gauss-point values and the constant stress of sparse cells (engine/gauss_points.hpp) keep it stable
+  // without touching the rank checks. (2×2 particles per cell still fails at A = 0.05 on 64 cells: README.)
+  for (int ppc : {3}) {
+    auto j = plate_scene(32, 0.1);
+    j["algorithm"]["mapping"] = "tls";
+    j["particles"]["per_cell"] = {ppc, ppc};
+    Simulation<2> sim(parse_scene(j));
+    REQUIRE_NOTHROW(run_to_end(sim));
+    require_conserved(sim.conservation());
+    INFO(ppc << "x" << ppc << ": u " << sim.errors().displacement_rms);
+    CHECK(sim.errors().displacement_rms < 0.01);
+  }
+}

@@ -1,0 +1,369 @@
+#pragma once
+// The Gauss-point integration path of reconstructed mappings (paper eqs 22–25, thesis eqs 5.16–5.17):
+// per active cell, density, momentum density, stress and body-force density are reconstructed from the cell's
+// particles (TLS, thesis §5.3 / §6.1.1; or MLS, paper eqs 6–17) and evaluated at fixed Gauss points, which then
+// take the particles' place in the P2G scatter. Gauss points never move: they are binned into coloured blocks
+// once. TLS fixes each cell's first Taylor coefficient from the particle sums, so the grid receives exactly
+// Σ m_p and Σ m_p v_p (Gauss rules with ≥ 2 points per axis integrate the quadratic Taylor basis exactly).
+#include <array>
+#include <vector>
+
+#include <tbb/parallel_for.h>
+
+#include "engine/cell_bins.hpp"
+#include "engine/scene.hpp"
+#include "kernels/mls.hpp"
+#include "kernels/quadrature.hpp"
+#include "kernels/taylor_ls.hpp"
+#include "kernels/transfer.hpp"
+
+namespace mpm {
+
+/// The reconstructed fields at the Gauss points, already multiplied by the quadrature weight ω_g.
+template <int Dim>
+struct GaussView {
+  std::array<const double*, Dim> x{};
+  const double* m = nullptr;                        ///< ρ̂ ω
+  std::array<const double*, Dim> q{};               ///< ρv̂ ω
+  std::array<const double*, sym_components<Dim>> s{};  ///< σ̂ ω
+  std::array<const double*, Dim> fb{};              ///< ρb̂ ω
+};
+
+/// P2G from Gauss points order[begin..end) (paper eqs 22–25): m_i += φ_i ρ̂ω, q_i += φ_i ρv̂ω,
+/// f_i += −∇φ_i·σ̂ω + φ_i ρb̂ω.
+template <ScatterFields Fields, bool Body, int Dim, int S, class Axis>
+inline void scatter_gauss(const TensorBasis<Dim, Axis>& basis, const GaussView<Dim>& gp, const GridView<Dim>& g,
+                          const unsigned* order, std::size_t begin, std::size_t end) {
+  for (std::size_t k = begin; k < end; ++k) {
+    const std::size_t ig = order[k];
+    double xg[Dim];
+    for (int d = 0; d < Dim; ++d) xg[d] = gp.x[d][ig];
+    const auto st = stencil_at<Dim, S>(basis, xg);
+    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>& dw) {
+      if constexpr (Fields.mass) g.m[i] += w * gp.m[ig];
+      for (int d = 0; d < Dim; ++d) {
+        if constexpr (Fields.momentum) g.q[d][i] += w * gp.q[d][ig];
+        if constexpr (Fields.force) {
+          double fi = Body ? w * gp.fb[d][ig] : 0.0;
+          for (int l = 0; l < Dim; ++l) fi -= dw[l] * gp.s[sym_index<Dim>(l, d)][ig];
+          g.f[d][i] += fi;
+        }
+      }
+    });
+  }
+}
+
+template <int Dim>
+class GaussPoints {
+ public:
+  explicit GaussPoints(const Scene& scene);
+
+  /// Reconstructs at the Gauss points of every cell that holds particles: ρ and ρv always (TLS: conservative),
+  /// σ and ρb when `stress` is set. `particles_by_cell` must bin the particles by single cells (block width 1).
+  /// Returns the particle momentum Σ m_p v_p, Σ m_p |v_p| (for the conservation check).
+  template <class Body>
+  MomentumTotals<Dim> rebuild(const ParticleView<Dim>& p, const CellBins<Dim>& particles_by_cell, const Body& body,
+                              bool stress);
+
+  GaussView<Dim> view() const;
+  /// The Gauss points as mass carriers, for the consistent-mass operator M_ij = Σ_g φ_i ρ̂ω φ_j (thesis eq. 3.9).
+  ParticleView<Dim> mass_view();
+  const CellBins<Dim>& bins() const { return bins_; }
+  const FallbackCounts& fallbacks() const { return fallbacks_; }
+
+ private:
+  template <int Degree, class Body>
+  MomentumTotals<Dim> rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body,
+                                  bool stress);
+  template <class Body>
+  MomentumTotals<Dim> rebuild_mls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body,
+                                  bool stress);
+  CellBox<Dim> cell_box(std::size_t cell) const;
+
+  Mapping mapping_;
+  int tls_degree_;
+  double mls_support_;
+  std::array<int, Dim> cells_;
+  std::array<double, Dim> h_;
+  int per_cell_ = 1;                    ///< Gauss points per cell
+  std::vector<std::array<double, Dim>> local_;  ///< Gauss points of the unit cell, in [0, 1]^Dim
+  std::vector<double> local_w_;                 ///< their weights (sum 1)
+  std::array<std::vector<double>, Dim> x_, q_, fb_;
+  std::vector<double> m_;
+  std::array<std::vector<double>, sym_components<Dim>> s_;
+  CellBins<Dim> bins_;
+  FallbackCounts fallbacks_;
+};
+
+}  // namespace mpm
+
+// ---- implementation of the templates ----------------------------------------------------------------------
+
+namespace mpm {
+
+namespace detail {
+
+/// The particles of up to 49 cells (a cell and its neighbours) as a sample source; values(ip) gives K fields.
+template <int Dim, int K, class Values>
+struct ParticleRanges {
+  static constexpr int dim = Dim;
+  static constexpr int fields = K;
+  static constexpr int max_ranges = 49;
+  const ParticleView<Dim>* p;
+  const unsigned* order;
+  Values values;
+  std::array<std::pair<std::size_t, std::size_t>, max_ranges> r{};
+  int n = 0;
+  void add(std::pair<std::size_t, std::size_t> range) {
+    if (range.first < range.second && n < max_ranges) r[n++] = range;
+  }
+  std::size_t size() const {
+    std::size_t s = 0;
+    for (int i = 0; i < n; ++i) s += r[i].second - r[i].first;
+    return s;
+  }
+  template <class F>
+  void for_each(F&& f) const {
+    for (int i = 0; i < n; ++i)
+      for (std::size_t k = r[i].first; k < r[i].second; ++k) {
+        const std::size_t ip = order[k];
+        Vec<Dim> x;
+        for (int d = 0; d < Dim; ++d) x[d] = p->x[d][ip];
+        f(x, values(ip), 1.0);
+      }
+  }
+};
+
+}  // namespace detail
+
+template <int Dim>
+template <class Body>
+MomentumTotals<Dim> GaussPoints<Dim>::rebuild(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
+                                              const Body& body, bool stress) {
+  if (mapping_ == Mapping::mls) return rebuild_mls(p, cells, body, stress);
+  switch (tls_degree_) {
+    case 0: return rebuild_tls<0>(p, cells, body, stress);
+    case 1: return rebuild_tls<1>(p, cells, body, stress);
+    default: return rebuild_tls<2>(p, cells, body, stress);
+  }
+}
+
+/// Per-particle fields the fits read: (ρ, ρv) and (σ, ρb), with ρ = m / (J V0).
+template <int Dim, class Body>
+struct ParticleFields {
+  const ParticleView<Dim>* p;
+  const Body* body;
+  double rho(std::size_t ip) const { return p->m[ip] / (det(*p, ip) * p->V0[ip]); }
+  Eigen::Matrix<double, 1 + Dim, 1> mass(std::size_t ip) const {
+    Eigen::Matrix<double, 1 + Dim, 1> f;
+    f[0] = rho(ip);
+    for (int d = 0; d < Dim; ++d) f[1 + d] = f[0] * p->v[d][ip];
+    return f;
+  }
+  Eigen::Matrix<double, sym_components<Dim> + Dim, 1> stress(std::size_t ip) const {
+    Eigen::Matrix<double, sym_components<Dim> + Dim, 1> f;
+    for (int c = 0; c < sym_components<Dim>; ++c) f[c] = p->s[c][ip];
+    std::array<double, Dim> b{};
+    if constexpr (Body::active) b = body->template at<Dim>(ip);
+    const double r = rho(ip);
+    for (int d = 0; d < Dim; ++d) f[sym_components<Dim> + d] = r * b[d];
+    return f;
+  }
+};
+
+/// A fit of degree 0 written in the basis of degree D (the higher coefficients zero).
+template <int D, int Dim, int K>
+TaylorFit<Dim, D, K> as_degree(const TaylorFit<Dim, 0, K>& f) {
+  TaylorFit<Dim, D, K> r;
+  r.cell = f.cell;
+  r.c.row(0) = f.c.row(0);
+  r.status = f.status;
+  if (D > 0) r.status.stage = FitStage::full;  // counted by the caller as a degree fallback
+  return r;
+}
+
+namespace detail {
+
+/// Bounds the reconstruction at the Gauss points by the data it came from (a Barth–Jespersen-type limiter):
+/// per field, the deviations from the cell mean are scaled by the largest α ∈ [0, 1] that keeps every Gauss-point
+/// value inside [min, max] of the cell's samples and its mean. The higher Taylor functions integrate to zero over
+/// the cell, so scaling them leaves the integral — mass, momentum — exactly as the constraint set it. Without
+/// it, a fit through a few clustered particles of a strongly compressed cell extrapolates to wild (even
+/// negative) densities at the Gauss points, which is how 2D MPM–TLS diverges (thesis §6.3.1).
+template <int Dim, int K, class Fit, class Source>
+void limited_values(const Fit& fit, const Source& own, const std::vector<Vec<Dim>>& points,
+                    std::vector<Eigen::Matrix<double, K, 1>>& values) {
+  const Eigen::Matrix<double, K, 1> mean = fit.c.row(0).transpose();
+  Eigen::Matrix<double, K, 1> lo = mean, hi = mean;
+  own.for_each([&](const Vec<Dim>&, const Eigen::Matrix<double, K, 1>& f, double) {
+    lo = lo.cwiseMin(f);
+    hi = hi.cwiseMax(f);
+  });
+  Eigen::Matrix<double, K, 1> alpha = Eigen::Matrix<double, K, 1>::Ones();
+  for (std::size_t g = 0; g < points.size(); ++g) {
+    values[g] = fit(points[g]);
+    for (int k = 0; k < K; ++k) {
+      const double dev = values[g][k] - mean[k];
+      if (dev > 0) alpha[k] = std::min(alpha[k], (hi[k] - mean[k]) / dev);
+      if (dev < 0) alpha[k] = std::min(alpha[k], (lo[k] - mean[k]) / dev);
+    }
+  }
+  for (auto& v : values) v = mean + alpha.cwiseProduct(v - mean);
+}
+
+}  // namespace detail
+
+template <int Dim>
+template <int Degree, class Body>
+MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
+                                                  const Body& body, bool stress) {
+  constexpr int KM = 1 + Dim, KS = sym_components<Dim> + Dim;
+  const ParticleFields<Dim, Body> fields{&p, &body};
+  auto mass_of = [&](std::size_t ip) { return fields.mass(ip); };
+  auto stress_of = [&](std::size_t ip) { return fields.stress(ip); };
+  using MassSource = detail::ParticleRanges<Dim, KM, decltype(mass_of)>;
+  using StressSource = detail::ParticleRanges<Dim, KS, decltype(stress_of)>;
+  std::size_t ncells = 1;
+  for (int d = 0; d < Dim; ++d) ncells *= cells_[d];
+  std::vector<MomentumTotals<Dim>> totals(ncells);
+  std::vector<FallbackCounts> counts(ncells);
+  const unsigned* order = cells.order().data();
+
+  tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
+    const auto own_range = cells.block_range(c);
+    const std::size_t first = c * per_cell_;
+    if (own_range.first == own_range.second) {  // an empty cell carries nothing: nothing to conserve there
+      for (int g = 0; g < per_cell_; ++g) {
+        m_[first + g] = 0.0;
+        for (int d = 0; d < Dim; ++d) q_[d][first + g] = fb_[d][first + g] = 0.0;
+        for (auto& col : s_) col[first + g] = 0.0;
+      }
+      return;
+    }
+    MassSource own{&p, order, mass_of};
+    StressSource own_s{&p, order, stress_of};
+    own.add(own_range);
+    own_s.add(own_range);
+    // Completion with the particles of neighbouring cells (thesis §5.2.3) is not used: measured on the plate at
+    // A = 0.1, it biases the slopes of compressed cells and made the 64-cell error 2.4x larger (docs/RESULTS.md);
+    // a cell its own particles do not determine drops to a lower degree instead, conservative all the same.
+    const NoSamples<Dim, KM> no_neighbours;
+    const NoSamples<Dim, KS> no_neighbours_s;
+    // the cell's totals Σ m_p, Σ m_p v_p fix the first Taylor coefficient (thesis eq. 5.9)
+    Eigen::Matrix<double, KM, 1> integral = Eigen::Matrix<double, KM, 1>::Zero();
+    for (std::size_t k = own_range.first; k < own_range.second; ++k) {
+      const std::size_t ip = order[k];
+      double v[Dim];
+      integral[0] += p.m[ip];
+      for (int d = 0; d < Dim; ++d) {
+        v[d] = p.v[d][ip];
+        integral[1 + d] += p.m[ip] * v[d];
+      }
+      totals[c].add(p.m[ip], v);
+    }
+    const CellBox<Dim> box = cell_box(c);
+    const double volume = box.volume();
+    std::vector<Vec<Dim>> points(per_cell_);
+    for (int g = 0; g < per_cell_; ++g)
+      for (int d = 0; d < Dim; ++d) points[g][d] = x_[d][first + g];
+    const auto fit = reconstruct_tls<Degree>(box, own, no_neighbours, integral);
+    counts[c].add(fit.status);
+    std::vector<Eigen::Matrix<double, KM, 1>> val(per_cell_);
+    detail::limited_values<Dim, KM>(fit, own, points, val);
+    for (int g = 0; g < per_cell_; ++g) {
+      const double w = local_w_[g] * volume;
+      m_[first + g] = w * val[g][0];
+      for (int d = 0; d < Dim; ++d) q_[d][first + g] = w * val[g][1 + d];
+    }
+    if (!stress) return;
+    // The unconstrained stress fit has no integral to anchor it: with fewer than two samples per Taylor function
+    // its slopes amplify particle noise and, measured, destabilise the plate with 2×2 particles per cell at
+    // A = 0.1; such cells get the constant (mean) stress, counted as a degree fallback.
+    const bool enough = own.size() >= 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
+    const auto sfit = enough ? reconstruct_ls<Degree>(box, own_s, no_neighbours_s)
+                             : as_degree<Degree>(reconstruct_ls<0>(box, own_s, no_neighbours_s));
+    counts[c].add(sfit.status);
+    if (!enough && Degree > 0) ++counts[c].degree;
+    std::vector<Eigen::Matrix<double, KS, 1>> sval(per_cell_);
+    detail::limited_values<Dim, KS>(sfit, own_s, points, sval);
+    for (int g = 0; g < per_cell_; ++g) {
+      const double w = local_w_[g] * volume;
+      for (int k = 0; k < sym_components<Dim>; ++k) s_[k][first + g] = w * sval[g][k];
+      for (int d = 0; d < Dim; ++d) fb_[d][first + g] = w * sval[g][sym_components<Dim> + d];
+    }
+  });
+  for (const auto& c : counts) fallbacks_ += c;
+  return sum_totals(totals);
+}
+
+template <int Dim>
+template <class Body>
+MomentumTotals<Dim> GaussPoints<Dim>::rebuild_mls(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
+                                                  const Body& body, bool stress) {
+  constexpr int KM = 1 + Dim, KS = sym_components<Dim> + Dim;
+  const ParticleFields<Dim, Body> fields{&p, &body};
+  auto mass_of = [&](std::size_t ip) { return fields.mass(ip); };
+  auto stress_of = [&](std::size_t ip) { return fields.stress(ip); };
+  std::size_t ncells = 1;
+  for (int d = 0; d < Dim; ++d) ncells *= cells_[d];
+  std::vector<MomentumTotals<Dim>> totals(ncells);
+  std::vector<FallbackCounts> counts(ncells);
+  const unsigned* order = cells.order().data();
+  const int reach = static_cast<int>(std::ceil(1.5 * mls_support_));  // cells within the weight's support
+  const MlsOptions opt{mls_support_};
+  Vec<Dim> h;
+  for (int d = 0; d < Dim; ++d) h[d] = h_[d];
+
+  tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
+    const auto own_range = cells.block_range(c);
+    const std::size_t first = c * per_cell_;
+    for (int g = 0; g < per_cell_; ++g) {
+      m_[first + g] = 0.0;
+      for (int d = 0; d < Dim; ++d) q_[d][first + g] = fb_[d][first + g] = 0.0;
+      for (auto& col : s_) col[first + g] = 0.0;
+    }
+    if (own_range.first == own_range.second) return;
+    for (std::size_t k = own_range.first; k < own_range.second; ++k) {
+      const std::size_t ip = order[k];
+      double v[Dim];
+      for (int d = 0; d < Dim; ++d) v[d] = p.v[d][ip];
+      totals[c].add(p.m[ip], v);
+    }
+    detail::ParticleRanges<Dim, KM, decltype(mass_of)> src{&p, order, mass_of};
+    detail::ParticleRanges<Dim, KS, decltype(stress_of)> src_s{&p, order, stress_of};
+    std::array<int, Dim> ci;
+    std::size_t rest = c;
+    for (int d = 0; d < Dim; ++d) {
+      ci[d] = static_cast<int>(rest % cells_[d]);
+      rest /= cells_[d];
+    }
+    const int span1 = Dim > 1 ? reach : 0;
+    for (int j = -span1; j <= span1; ++j)
+      for (int i = -reach; i <= reach; ++i) {
+        const int a = ci[0] + i, b = Dim > 1 ? ci[Dim - 1] + j : 0;
+        if (a < 0 || a >= cells_[0] || (Dim > 1 && (b < 0 || b >= cells_[Dim - 1]))) continue;
+        const std::size_t n = Dim > 1 ? a + static_cast<std::size_t>(cells_[0]) * b : a;
+        src.add(cells.block_range(n));
+        src_s.add(cells.block_range(n));
+      }
+    const double volume = cell_box(c).volume();
+    for (int g = 0; g < per_cell_; ++g) {
+      Vec<Dim> xg;
+      for (int d = 0; d < Dim; ++d) xg[d] = x_[d][first + g];
+      const double w = local_w_[g] * volume;
+      const auto val = mls_value(xg, h, src, opt);  // paper eq. 13
+      counts[c].add(val.status);
+      m_[first + g] = w * val.value[0];
+      for (int d = 0; d < Dim; ++d) q_[d][first + g] = w * val.value[1 + d];
+      if (!stress) continue;
+      const auto sv = mls_value(xg, h, src_s, opt);
+      counts[c].add(sv.status);
+      for (int k = 0; k < sym_components<Dim>; ++k) s_[k][first + g] = w * sv.value[k];
+      for (int d = 0; d < Dim; ++d) fb_[d][first + g] = w * sv.value[sym_components<Dim> + d];
+    }
+  });
+  for (const auto& c : counts) fallbacks_ += c;
+  return sum_totals(totals);
+}
+
+}  // namespace mpm
