@@ -12,7 +12,10 @@
 #include <vector>
 
 #include <benchmark/benchmark.h>
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wuninitialized"  // g++ 12 false positive inside avx512fintrin.h
 #include <immintrin.h>
+#pragma GCC diagnostic pop
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 #include <tbb/partitioner.h>

@@ -11,8 +11,9 @@
 // The two baselines live here only (DESIGN.md: they justify the coloured scheme; they are not engine code).
 // Every variant is checked against the serial result before timing.
 //
-// G2P (gather_g2p) for the three gathers the schemes use, the stress update alone (neo-Hookean σ(F)), and the
-// per-step binning (CellBins::bin) and the every-16-steps permutation (ParticleStore::permute).
+// G2P (gather_g2p) for the gathers the schemes use, MUSL's fused velocity-update + momentum-scatter pass
+// (advance_velocity_scatter_momentum, coloured), the stress update alone (neo-Hookean σ(F)), and the per-step
+// binning (CellBins::bin) and the every-16-steps permutation (ParticleStore::permute).
 #include <atomic>
 #include <memory>
 #include <vector>
@@ -198,7 +199,7 @@ void BM_P2G(benchmark::State& state, P2G variant) {
 }
 
 // ---------------------------------------------------------------------------------------------------------------
-enum class G2P { usl, musl_velocity, musl_position_deformation };
+enum class G2P { usl, velocity, position_deformation, fused_velocity_momentum };
 
 template <mpm::GatherFields Fields>
 void gather(ParticleSet2D& ps, Grid2D& g, double dt, const mpm::NeoHookean& law, mpm::ParticleGuard& guard) {
@@ -237,8 +238,20 @@ void BM_G2P(benchmark::State& state, G2P variant) {
   auto run = [&] {
     switch (variant) {
       case G2P::usl: gather<mpm::GatherFields{true, true, true}>(ps, g, dt, law, guard); break;
-      case G2P::musl_velocity: gather<mpm::GatherFields{true, false, false}>(ps, g, dt, law, guard); break;
-      case G2P::musl_position_deformation: gather<mpm::GatherFields{false, true, true}>(ps, g, dt, law, guard); break;
+      case G2P::velocity: gather<mpm::GatherFields{true, false, false}>(ps, g, dt, law, guard); break;
+      case G2P::position_deformation: gather<mpm::GatherFields{false, true, true}>(ps, g, dt, law, guard); break;
+      case G2P::fused_velocity_momentum: {  // as Simulation::step_with runs it for MUSL: clear q, coloured pass
+        tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.dofs, kGridGrain), [&](const auto& r) {
+          for (int d = 0; d < 2; ++d) std::fill(g.q[d].begin() + r.begin(), g.q[d].begin() + r.end(), 0.0);
+        });
+        const auto pv = ps.store.view();
+        const auto gv = g.view();
+        const unsigned* order = ps.bins.order().data();
+        ps.bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
+          benchmark::DoNotOptimize(mpm::advance_velocity_scatter_momentum<2, 3>(ps.basis, pv, gv, order, b, e, dt));
+        });
+        break;
+      }
     }
   };
   run();
@@ -321,8 +334,9 @@ const bool registered = [] {
   }
   const std::int64_t n = 1'000'000;
   args(RegisterBenchmark("g2p/usl", BM_G2P, G2P::usl), n, {1, 2});
-  args(RegisterBenchmark("g2p/musl_velocity", BM_G2P, G2P::musl_velocity), n, {1, 2});
-  args(RegisterBenchmark("g2p/musl_position_deformation", BM_G2P, G2P::musl_position_deformation), n, {1, 2});
+  args(RegisterBenchmark("g2p/velocity", BM_G2P, G2P::velocity), n, {1, 2});
+  args(RegisterBenchmark("g2p/position_deformation", BM_G2P, G2P::position_deformation), n, {1, 2});
+  args(RegisterBenchmark("fused/musl_velocity_momentum", BM_G2P, G2P::fused_velocity_momentum), n, {1, 2});
   args(RegisterBenchmark("stress/neo_hookean", BM_Stress), n, {1, 2});
   args(RegisterBenchmark("bin", BM_Bin), n, {1, 2});
   args(RegisterBenchmark("permute", BM_Permute), n, {1, 2});
