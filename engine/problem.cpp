@@ -4,6 +4,7 @@
 #include <stdexcept>
 
 #include "engine/material.hpp"
+#include "engine/reference_1d.hpp"
 
 namespace mpm {
 
@@ -104,6 +105,37 @@ class VibratingPlate final : public Problem<2> {
   double L_, A_, c_;
 };
 
+/// Column compaction (thesis §5.4.2, PROBLEMS.md): [0, H] fixed at the bottom, body force ramped to b_f over t_f;
+/// exact solution for the linear-elastic law (docs/COLUMN_COMPACTION.md).
+class ColumnCompactionProblem final : public Problem<1> {
+ public:
+  ColumnCompactionProblem(const Scene& s) {
+    c_.height = s.problem.height;
+    c_.max_body_force = s.problem.max_body_force;
+    c_.ramp_time = s.problem.ramp_time;
+    c_.material = s.material;
+  }
+  std::vector<Body> bodies() const override {
+    return {{{0.0}, {c_.height}, c_.material, [](const std::array<double, 1>&) { return std::array<double, 1>{}; }}};
+  }
+  bool has_body_force() const override { return true; }
+  BodyForce<1> body_force(double t, std::array<const double*, 1>) const override {
+    return UniformBodyForce<1>{{c_.body_force(t)}};
+  }
+  bool has_exact() const override { return c_.material.model == MaterialModel::linear_elastic; }
+  ExactState<1> exact(const std::array<double, 1>& X, double t) const override {
+    const Fields1d f = column_compaction_exact(c_, X[0], t);
+    ExactState<1> e;
+    e.u[0] = f.u;
+    e.v[0] = f.v;
+    e.sigma[0] = f.sigma;
+    return e;
+  }
+
+ private:
+  ColumnCompaction c_;
+};
+
 /// A scene's own bodies with uniform initial velocity, and gravity.
 template <int Dim>
 class UserScene final : public Problem<Dim> {
@@ -148,6 +180,9 @@ std::unique_ptr<Problem<Dim>> make_problem(const Scene& scene) {
     case ProblemName::none: return std::make_unique<UserScene<Dim>>(scene);
     case ProblemName::vibrating_bar:
       if constexpr (Dim == 1) return std::make_unique<VibratingBar>(scene);
+      break;
+    case ProblemName::column_compaction:
+      if constexpr (Dim == 1) return std::make_unique<ColumnCompactionProblem>(scene);
       break;
     case ProblemName::vibrating_plate:
       if constexpr (Dim == 2) return std::make_unique<VibratingPlate>(scene);

@@ -182,3 +182,25 @@ TEST_CASE("vibrating plate at A = 0.1 - 32 cells - BSMPM-TLS completes (thesis 6
     CHECK(sim.errors().displacement_rms < 0.01);
   }
 }
+
+TEST_CASE("column compaction (thesis 5.4.2) - direct BSMPM errors against the exact solution decrease 12 -> 25 -> 50 cells",
+          "[verification][column]") {
+  RunErrors e[3];
+  int k = 0;
+  for (int cells : {12, 25, 50}) {
+    const nlohmann::json j = {{"dimension", 1},
+                              {"problem", {{"name", "column-compaction"}}},
+                              {"grid", {{"length", {50.0}}, {"cells", {cells}}}},
+                              {"particles", {{"per_cell", {4}}}}};
+    Simulation<1> sim(parse_scene(j));
+    run_to_end(sim);
+    require_conserved(sim.conservation());
+    e[k++] = sim.errors();
+  }
+  for (int i = 0; i < 2; ++i) {
+    INFO("u " << e[i].displacement_rms << " -> " << e[i + 1].displacement_rms << ", sigma " << e[i].stress_rms
+              << " -> " << e[i + 1].stress_rms);
+    CHECK(order(e[i].displacement_rms, e[i + 1].displacement_rms) >= 1.8);
+    CHECK(e[i + 1].stress_rms < 0.5 * e[i].stress_rms);
+  }
+}
