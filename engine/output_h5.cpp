@@ -1,6 +1,8 @@
 // HDF5 run file and XDMF sidecar (see output_h5.hpp for the layout). HDF5 C API only.
 #include "engine/output_h5.hpp"
 
+#include "engine/h5_handle.hpp"
+
 #include <hdf5.h>
 
 #include <algorithm>
@@ -14,70 +16,14 @@
 namespace mpm {
 namespace {
 
+using namespace h5;
+
 namespace fs = std::filesystem;
 
 constexpr hsize_t kMaxChunk = hsize_t{1} << 16;  // elements per chunk of a particle column (512 KiB of doubles)
 constexpr hsize_t kMetricsChunkValues = 4096;    // values per chunk of /metrics (32 KiB), also the write batch
 constexpr const char* kCheckpointTmp = "/checkpoint.new";
 
-// HDF5 prints its error stack to stderr by default; we silence that and build our own messages. The setting is
-// per thread in thread-safe builds, so every entry point repeats it (it is cheap).
-void quiet() { H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr); }
-
-// The most specific entry of HDF5's error stack (e.g. "unable to open file: ... No such file or directory").
-std::string hdf5_detail() {
-  std::string detail;
-  auto innermost = [](unsigned n, const H5E_error2_t* e, void* data) -> herr_t {
-    if (n == 0 && e->desc) *static_cast<std::string*>(data) = e->desc;
-    return 0;
-  };
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, innermost, &detail);
-  H5Eclear2(H5E_DEFAULT);
-  return detail;
-}
-
-[[noreturn]] void fail(const std::string& file, const std::string& what) {
-  const std::string detail = hdf5_detail();
-  throw OutputError("HDF5 file '" + file + "': " + what + " failed" + (detail.empty() ? "" : ": " + detail));
-}
-
-void check(herr_t status, const std::string& file, const std::string& what) {
-  if (status < 0) fail(file, what);
-}
-
-/// Owns one HDF5 id and closes it with the matching H5?close, so early throws leak nothing.
-class Handle {
- public:
-  using Closer = herr_t (*)(hid_t);
-  Handle() = default;
-  Handle(hid_t id, Closer closer) : id_(id), closer_(closer) {}
-  Handle(Handle&& o) noexcept : id_(std::exchange(o.id_, -1)), closer_(o.closer_) {}
-  Handle& operator=(Handle&& o) noexcept {
-    if (this != &o) {
-      reset();
-      id_ = std::exchange(o.id_, -1);
-      closer_ = o.closer_;
-    }
-    return *this;
-  }
-  ~Handle() { reset(); }
-  hid_t get() const { return id_; }
-  bool valid() const { return id_ >= 0; }
-  hid_t release() { return std::exchange(id_, -1); }
-  void reset() {
-    if (id_ >= 0) closer_(id_);
-    id_ = -1;
-  }
-
- private:
-  hid_t id_ = -1;
-  Closer closer_ = nullptr;
-};
-
-Handle own(hid_t id, Handle::Closer closer, const std::string& file, const std::string& what) {
-  if (id < 0) fail(file, what);
-  return Handle(id, closer);
-}
 
 bool exists(hid_t loc, const std::string& name, const std::string& file) {
   const htri_t e = H5Lexists(loc, name.c_str(), H5P_DEFAULT);

@@ -18,12 +18,15 @@
 #include <stdexcept>
 #include <utility>
 
+#include "engine/h5_handle.hpp"
 #include "engine/output_h5.hpp"
 #include "engine/scene.hpp"
 
 namespace mpm {
 
 namespace {
+
+using namespace h5;
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -272,82 +275,44 @@ struct Table {
 
 // ---- HDF5 ---------------------------------------------------------------------------------------------------
 
-[[noreturn]] void h5_fail(const std::string& file, const std::string& what) {
-  std::string detail;
-  auto innermost = [](unsigned n, const H5E_error2_t* e, void* data) -> herr_t {
-    if (n == 0 && e->desc) *static_cast<std::string*>(data) = e->desc;
-    return 0;
-  };
-  H5Ewalk2(H5E_DEFAULT, H5E_WALK_DOWNWARD, innermost, &detail);
-  H5Eclear2(H5E_DEFAULT);
-  throw OutputError("HDF5 file '" + file + "': " + what + " failed" + (detail.empty() ? "" : ": " + detail));
-}
-
-class H5Id {
- public:
-  using Closer = herr_t (*)(hid_t);
-  H5Id(hid_t id, Closer closer, const std::string& file, const std::string& what) : id_(id), closer_(closer) {
-    if (id_ < 0) h5_fail(file, what);
-  }
-  H5Id(H5Id&& o) noexcept : id_(std::exchange(o.id_, -1)), closer_(o.closer_) {}
-  H5Id(const H5Id&) = delete;
-  H5Id& operator=(const H5Id&) = delete;
-  ~H5Id() {
-    if (id_ >= 0) closer_(id_);
-  }
-  hid_t get() const { return id_; }
-  void close(const std::string& file) {
-    const hid_t id = std::exchange(id_, -1);
-    if (id >= 0 && closer_(id) < 0) h5_fail(file, "close");
-  }
-
- private:
-  hid_t id_;
-  Closer closer_;
-};
-
-void h5_check(herr_t status, const std::string& file, const std::string& what) {
-  if (status < 0) h5_fail(file, what);
-}
-
-H5Id vlen_utf8(const std::string& file) {
-  H5Id t(H5Tcopy(H5T_C_S1), H5Tclose, file, "H5Tcopy");
-  h5_check(H5Tset_size(t.get(), H5T_VARIABLE), file, "H5Tset_size");
-  h5_check(H5Tset_cset(t.get(), H5T_CSET_UTF8), file, "H5Tset_cset");
+Handle vlen_utf8(const std::string& file) {
+  Handle t = own(H5Tcopy(H5T_C_S1), H5Tclose, file, "H5Tcopy");
+  check(H5Tset_size(t.get(), H5T_VARIABLE), file, "H5Tset_size");
+  check(H5Tset_cset(t.get(), H5T_CSET_UTF8), file, "H5Tset_cset");
   return t;
 }
 
 void h5_strings_attr(hid_t obj, const std::string& name, const std::vector<std::string>& values, bool scalar,
                      const std::string& file) {
-  H5Id type = vlen_utf8(file);
+  Handle type = vlen_utf8(file);
   const hsize_t n = values.size();
-  H5Id space(scalar ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr), H5Sclose, file, "H5Screate");
-  H5Id attr(H5Acreate2(obj, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, file,
+  Handle space = own(scalar ? H5Screate(H5S_SCALAR) : H5Screate_simple(1, &n, nullptr), H5Sclose, file, "H5Screate");
+  Handle attr = own(H5Acreate2(obj, name.c_str(), type.get(), space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, file,
             "H5Acreate2('" + name + "')");
   std::vector<const char*> ptrs;
   for (const auto& v : values) ptrs.push_back(v.c_str());
-  if (!ptrs.empty()) h5_check(H5Awrite(attr.get(), type.get(), ptrs.data()), file, "H5Awrite('" + name + "')");
+  if (!ptrs.empty()) check(H5Awrite(attr.get(), type.get(), ptrs.data()), file, "H5Awrite('" + name + "')");
 }
 
 void h5_int_attr(hid_t obj, const std::string& name, long long v, const std::string& file) {
-  H5Id space(H5Screate(H5S_SCALAR), H5Sclose, file, "H5Screate");
-  H5Id attr(H5Acreate2(obj, name.c_str(), H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, file,
+  Handle space = own(H5Screate(H5S_SCALAR), H5Sclose, file, "H5Screate");
+  Handle attr = own(H5Acreate2(obj, name.c_str(), H5T_STD_I64LE, space.get(), H5P_DEFAULT, H5P_DEFAULT), H5Aclose, file,
             "H5Acreate2('" + name + "')");
-  h5_check(H5Awrite(attr.get(), H5T_NATIVE_LLONG, &v), file, "H5Awrite('" + name + "')");
+  check(H5Awrite(attr.get(), H5T_NATIVE_LLONG, &v), file, "H5Awrite('" + name + "')");
 }
 
 void h5_dataset(hid_t group, const std::string& name, hid_t file_type, hid_t mem_type, const void* data,
                 hsize_t n, const std::string& file) {
-  H5Id space(H5Screate_simple(1, &n, nullptr), H5Sclose, file, "H5Screate_simple");
-  H5Id ds(H5Dcreate2(group, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
+  Handle space = own(H5Screate_simple(1, &n, nullptr), H5Sclose, file, "H5Screate_simple");
+  Handle ds = own(H5Dcreate2(group, name.c_str(), file_type, space.get(), H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT),
           H5Dclose, file, "H5Dcreate2('" + name + "')");
   if (n > 0)
-    h5_check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), file, "H5Dwrite('" + name + "')");
+    check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data), file, "H5Dwrite('" + name + "')");
 }
 
 void h5_strings(hid_t group, const std::string& name, const std::vector<std::string>& values,
                 const std::string& file) {
-  H5Id type = vlen_utf8(file);
+  Handle type = vlen_utf8(file);
   std::vector<const char*> ptrs;
   for (const auto& v : values) ptrs.push_back(v.c_str());
   h5_dataset(group, name, type.get(), type.get(), ptrs.data(), values.size(), file);
@@ -366,7 +331,7 @@ void write_h5(const std::string& path, const json& scene, const std::vector<Stud
   H5Eset_auto2(H5E_DEFAULT, nullptr, nullptr);
   const std::string tmp = path + ".partial";
   {
-    H5Id f(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, tmp, "H5Fcreate");
+    Handle f = own(H5Fcreate(tmp.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT), H5Fclose, tmp, "H5Fcreate");
     std::vector<std::string> keys;
     nlohmann::ordered_json vary = nlohmann::ordered_json::object();  // in --vary order
     for (const auto& a : axes) {
@@ -385,7 +350,7 @@ void write_h5(const std::string& path, const json& scene, const std::vector<Stud
     h5_int_attr(f.get(), "repeat", options.repeat, tmp);
     h5_int_attr(f.get(), "threads", options.threads, tmp);
 
-    H5Id g(H5Gcreate2(f.get(), "table", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, tmp, "H5Gcreate2('table')");
+    Handle g = own(H5Gcreate2(f.get(), "table", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), H5Gclose, tmp, "H5Gcreate2('table')");
     for (std::size_t k = 0; k < keys.size(); ++k) {
       std::vector<std::string> col;
       for (const auto& r : rows) col.push_back(r.values[k]);
