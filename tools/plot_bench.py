@@ -70,12 +70,9 @@ def args_of(name):
 
 
 def fmt_time(s):
-    if s >= 1:
-        return f"{s:.3g} s"
-    if s >= 1e-3:
-        return f"{s * 1e3:.3g} ms"
-    if s >= 1e-6:
-        return f"{s * 1e6:.3g} µs"
+    for scale, unit in ((1.0, "s"), (1e-3, "ms"), (1e-6, "µs")):
+        if s / scale >= 0.9995:
+            return f"{s / scale:.3g} {unit}"
     return f"{s * 1e9:.3g} ns"
 
 

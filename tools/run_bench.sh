@@ -18,7 +18,7 @@
 #                (compiles, tests), which otherwise takes one of the two cores and distorts the 2-thread figures;
 #                it also slows that other work down while the suite runs, so use it briefly and say so.
 #
-# The whole suite takes ~7 minutes on 2 cores. The machine should be otherwise idle: run_meta.txt records the
+# The whole suite takes ~6-7 minutes on 2 cores. The machine should be otherwise idle: run_meta.txt records the
 # load average and the CPU time other processes used during each program, and the table repeats it.
 set -euo pipefail
 
