@@ -15,8 +15,11 @@ struct BarResult {
   double end_stress_error;  ///< largest stress error of the two end particles
 };
 
-BarResult run_bar(int cells, const std::string& basis, const std::string& mass, const std::string& update = "musl") {
-  Simulation<1> sim(parse_scene(bar_scene(cells, basis, mass, update)));
+BarResult run_bar(int cells, const std::string& basis, const std::string& mass, const std::string& update = "musl",
+                  const std::string& mapping = "direct") {
+  auto scene = bar_scene(cells, basis, mass, update);
+  scene["algorithm"]["mapping"] = mapping;
+  Simulation<1> sim(parse_scene(scene));
   run_to_end(sim);
   const auto& s = sim.particles();
   const auto X = s.column(Field::reference), sigma = s.column(Field::stress);
@@ -32,34 +35,31 @@ void require_conserved(const Conservation& c) {
   CHECK(c.momentum_rel_max <= 1e-13);
 }
 
+/// Runs the bar on 10, 20 and 40 cells and checks conservation and the observed orders of u and σ.
+void require_bar_orders(const std::string& basis, const std::string& mass, const std::string& mapping, double u_order,
+                        double sigma_order) {
+  const BarResult r[3] = {run_bar(10, basis, mass, "musl", mapping), run_bar(20, basis, mass, "musl", mapping),
+                          run_bar(40, basis, mass, "musl", mapping)};
+  INFO("u: " << r[0].errors.displacement_rms << " " << r[1].errors.displacement_rms << " "
+             << r[2].errors.displacement_rms);
+  INFO("sigma: " << r[0].errors.stress_rms << " " << r[1].errors.stress_rms << " " << r[2].errors.stress_rms);
+  for (int i = 0; i < 3; ++i) require_conserved(r[i].conservation);
+  for (int i = 0; i < 2; ++i) {
+    CHECK(order(r[i].errors.displacement_rms, r[i + 1].errors.displacement_rms) >= u_order);
+    CHECK(order(r[i].errors.stress_rms, r[i + 1].errors.stress_rms) >= sigma_order);
+  }
+}
+
 }  // namespace
 
 TEST_CASE("vibrating bar - MPM-P1 - MUSL: displacement order 2 - stress order 1 (thesis Fig 5.9a)",
           "[verification][bar]") {
-  const BarResult r10 = run_bar(10, "linear", "lumped"), r20 = run_bar(20, "linear", "lumped"),
-                  r40 = run_bar(40, "linear", "lumped");
-  for (const auto* r : {&r10, &r20, &r40}) require_conserved(r->conservation);
-  INFO("u: " << r10.errors.displacement_rms << " " << r20.errors.displacement_rms << " "
-             << r40.errors.displacement_rms);
-  INFO("sigma: " << r10.errors.stress_rms << " " << r20.errors.stress_rms << " " << r40.errors.stress_rms);
-  CHECK(order(r10.errors.displacement_rms, r20.errors.displacement_rms) >= 1.8);
-  CHECK(order(r20.errors.displacement_rms, r40.errors.displacement_rms) >= 1.8);
-  CHECK(order(r10.errors.stress_rms, r20.errors.stress_rms) >= 0.9);
-  CHECK(order(r20.errors.stress_rms, r40.errors.stress_rms) >= 0.9);
+  require_bar_orders("linear", "lumped", "direct", 1.8, 0.9);
 }
 
 TEST_CASE("vibrating bar - quadratic B-splines with the consistent-mass projection: orders 3 (u) and 2 (sigma)",
           "[verification][bar]") {
-  const BarResult r10 = run_bar(10, "bspline2", "projection"), r20 = run_bar(20, "bspline2", "projection"),
-                  r40 = run_bar(40, "bspline2", "projection");
-  for (const auto* r : {&r10, &r20, &r40}) require_conserved(r->conservation);
-  INFO("u: " << r10.errors.displacement_rms << " " << r20.errors.displacement_rms << " "
-             << r40.errors.displacement_rms);
-  INFO("sigma: " << r10.errors.stress_rms << " " << r20.errors.stress_rms << " " << r40.errors.stress_rms);
-  CHECK(order(r10.errors.displacement_rms, r20.errors.displacement_rms) >= 2.7);
-  CHECK(order(r20.errors.displacement_rms, r40.errors.displacement_rms) >= 2.7);
-  CHECK(order(r10.errors.stress_rms, r20.errors.stress_rms) >= 1.8);
-  CHECK(order(r20.errors.stress_rms, r40.errors.stress_rms) >= 1.8);
+  require_bar_orders("bspline2", "projection", "direct", 2.7, 1.8);
 }
 
 TEST_CASE("vibrating bar - quadratic B-splines with lumped mass: the boundary defect (thesis Fig 5.10)",
@@ -126,22 +126,7 @@ TEST_CASE("vibrating plate - USL with projection and consistent mass conserve an
 
 TEST_CASE("vibrating bar - BSMPM-TLS with the consistent-mass projection: orders 3 (u) and 2 (sigma) (thesis Fig 5.9c)",
           "[verification][bar][tls]") {
-  RunErrors e[3];
-  int k = 0;
-  for (int cells : {10, 20, 40}) {
-    auto j = bar_scene(cells, "bspline2", "projection");
-    j["algorithm"]["mapping"] = "tls";
-    Simulation<1> sim(parse_scene(j));
-    run_to_end(sim);
-    require_conserved(sim.conservation());
-    e[k++] = sim.errors();
-  }
-  INFO("u: " << e[0].displacement_rms << " " << e[1].displacement_rms << " " << e[2].displacement_rms);
-  INFO("sigma: " << e[0].stress_rms << " " << e[1].stress_rms << " " << e[2].stress_rms);
-  for (int i = 0; i < 2; ++i) {
-    CHECK(order(e[i].displacement_rms, e[i + 1].displacement_rms) >= 2.7);
-    CHECK(order(e[i].stress_rms, e[i + 1].stress_rms) >= 1.8);
-  }
+  require_bar_orders("bspline2", "projection", "tls", 2.7, 1.8);
 }
 
 TEST_CASE("TLS conserves mass and momentum to round-off after every P2G - 1D and 2D - uniform and random layouts",
