@@ -710,7 +710,14 @@ void apply_override(json& scene, const std::string& assignment) {
   }
   // A JSON value if it parses as one; otherwise the text itself, so that `algorithm.mapping=mls` works unquoted.
   json value = json::parse(text, nullptr, false);
-  if (value.is_discarded()) value = text;
+  if (value.is_discarded()) {
+    value = text;
+    try {  // a scene is JSON text: a value that is not valid UTF-8 could never be written back (found by fuzzing)
+      (void)value.dump();
+    } catch (const json::type_error&) {
+      throw SceneError(one_line("--set " + key + ": the value is not valid UTF-8 text"));
+    }
+  }
 
   json* node = &scene;
   std::string walked;

@@ -387,3 +387,8 @@ TEST_CASE("load_scene_file", "[scene]") {
   CHECK_THROWS_WITH(mpm::load_scene_file(path), StartsWith("scene: " + path + ":3:"));
   std::remove(path.c_str());
 }
+
+TEST_CASE("apply_override refuses a bare value that is not valid UTF-8", "[scene]") {
+  nlohmann::json j = nlohmann::json::object();
+  REQUIRE_THROWS_WITH(mpm::apply_override(j, "output.file=\xff.h5"), Catch::Contains("output.file") && Catch::Contains("UTF-8"));
+}
