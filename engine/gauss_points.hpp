@@ -70,6 +70,8 @@ class GaussPoints {
   ParticleView<Dim> mass_view();
   const CellBins<Dim>& bins() const { return bins_; }
   const FallbackCounts& fallbacks() const { return fallbacks_; }
+  /// The reconstruction's name in the pipeline's stage names ("tls", "mls").
+  const char* name() const { return mapping_ == Mapping::mls ? "mls" : "tls"; }
 
  private:
   template <int Degree, class Body>

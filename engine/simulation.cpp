@@ -227,8 +227,6 @@ Simulation<Dim>::Simulation(const Scene& scene)
         return CellBins<Dim>(c, l, std::max(2, degree_of(scene.grid.basis)) * 2);
       }()) {
   if (scene.dimension != Dim) throw std::logic_error("Simulation: scene dimension does not match");
-  if (scene.algorithm.mapping == Mapping::cubic_spline)
-    throw SceneError("scene: algorithm.mapping = \"cubic-spline\": not available in this build (use direct, mls or tls)");
 
   // time step: given, or a fraction of the critical step h_min / c of the stiffest body
   double h_min = 1e300, c_max = 0.0;
@@ -309,7 +307,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
   }
   pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force());
   if (gauss_) {  // every scatter reads the Gauss points, rebuilt from the particles just before it
-    const std::string rebuild = scene.algorithm.mapping == Mapping::tls ? "tls-rebuild+" : "mls-rebuild+";
+    const std::string rebuild = std::string(gauss_->name()) + "-rebuild+";
     std::vector<std::string> stages;
     for (const auto& st : pipeline_) {
       if (st == "g2p-velocity+p2g-momentum") {
