@@ -1,7 +1,8 @@
 #pragma once
 // Particles binned by block of cells, blocks split into 2^Dim colour classes, for the lock-free scatter:
 // two blocks of one colour are separated by a block of another colour along every axis, and a block is at least
-// as wide as the stencil reaches beyond a cell, so blocks of one colour never write the same DOF. One
+// as wide as the stencil reaches beyond a cell (with the kernels' padding lane, stencil.hpp), so blocks of one
+// colour never write the same DOF. One
 // tbb::parallel_for per colour needs no atomics, and since the order of the sums into each DOF is fixed by the
 // (stable) sort and the colour sequence, the result is bitwise identical for any thread count.
 #include <array>

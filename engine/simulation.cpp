@@ -272,9 +272,10 @@ Simulation<Dim>::Simulation(const Scene& scene)
   particle_mass_ = deterministic_sum(n, [&](std::size_t p) { return seeds.m[p]; });
   empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
 
-  grid_.stride1 = scene.grid.cells[0] + degree_of(scene.grid.basis);
-  grid_.dofs = 1;
-  for (int d = 0; d < Dim; ++d) grid_.dofs *= scene.grid.cells[d] + degree_of(scene.grid.basis);
+  // DOF = i0 + stride1 · i1, with ghost columns for the kernels' padding lanes (stencil.hpp); they stay empty
+  const int degree = degree_of(scene.grid.basis);
+  grid_.stride1 = grid_stride(scene.grid.cells[0] + degree, degree + 1);
+  grid_.dofs = Dim == 1 ? grid_.stride1 : grid_.stride1 * (scene.grid.cells[Dim - 1] + degree);
   grid_.m.assign(grid_.dofs, 0.0);
   for (int d = 0; d < Dim; ++d) {
     for (auto* a : {&grid_.q[d], &grid_.f[d], &grid_.v[d], &grid_.a[d]}) a->assign(grid_.dofs, 0.0);
@@ -558,15 +559,16 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
   };
   const bool consistent_a = scene_.algorithm.mass == MassMatrix::consistent;
   const bool consistent_v = scene_.algorithm.mass != MassMatrix::lumped;
-  // a = M⁻¹ f (eqs 2.34, 2.46); empty and fixed DOFs get none
+  // empty and fixed DOFs get no acceleration and no velocity
+  auto free_dof = [&](int d, std::size_t i) { return grid_.m[i] > empty_mass_ && !grid_.fixed[d][i]; };
+  // a = M⁻¹ f (eqs 2.34, 2.46)
   auto accelerations = [&] {
     if (consistent_a) {
       solve_consistent(basis, carriers, carrier_bins, grid_.a, grid_.f);
     } else {
       parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i)
-          for (int d = 0; d < Dim; ++d)
-            grid_.a[d][i] = grid_.m[i] > empty_mass_ && !grid_.fixed[d][i] ? grid_.f[d][i] / grid_.m[i] : 0.0;
+          for (int d = 0; d < Dim; ++d) grid_.a[d][i] = free_dof(d, i) ? grid_.f[d][i] / grid_.m[i] : 0.0;
       });
     }
   };
@@ -577,8 +579,7 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
     } else {
       parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
         for (std::size_t i = b; i < e; ++i)
-          for (int d = 0; d < Dim; ++d)
-            grid_.v[d][i] = grid_.m[i] > empty_mass_ && !grid_.fixed[d][i] ? grid_.q[d][i] / grid_.m[i] : 0.0;
+          for (int d = 0; d < Dim; ++d) grid_.v[d][i] = free_dof(d, i) ? grid_.q[d][i] / grid_.m[i] : 0.0;
       });
     }
   };
@@ -588,14 +589,29 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
         for (int d = 0; d < Dim; ++d) grid_.v[d][i] += dt * grid_.a[d][i];
     });
   };
+  // USL grid update, eqs 2.34–2.36; with the lumped mass in one pass over the grid (same arithmetic)
+  auto accelerations_and_velocities = [&] {
+    if (consistent_v) {
+      accelerations();
+      velocities();
+      advance_velocities();
+      return;
+    }
+    parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i)
+        for (int d = 0; d < Dim; ++d) {
+          const bool free = free_dof(d, i);
+          grid_.a[d][i] = free ? grid_.f[d][i] / grid_.m[i] : 0.0;
+          grid_.v[d][i] = free ? grid_.q[d][i] / grid_.m[i] + dt * grid_.a[d][i] : 0.0;
+        }
+    });
+  };
 
   switch (scene_.algorithm.update) {
     case Update::usl:  // thesis Algorithm 1
       clear_grid(true, true, true);
       scatter.template operator()<ScatterFields{true, true, true}>();
-      accelerations();
-      velocities();
-      advance_velocities();
+      accelerations_and_velocities();
       gather.template operator()<GatherFields{true, true, true}>("g2p");
       break;
     case Update::musl:  // thesis Algorithm 2
@@ -688,16 +704,20 @@ Energy Simulation<Dim>::energy() const {
   const auto& s = store_;
   const auto m = s.column(Field::mass);
   const auto V0 = s.column(Field::volume0);
+  std::array<std::span<const double>, Dim> v;
+  std::array<std::span<const double>, Dim * Dim> F_col;
+  for (int d = 0; d < Dim; ++d) v[d] = s.column(Field::velocity, d);
+  for (int c = 0; c < Dim * Dim; ++c) F_col[c] = s.column(Field::deformation, c);
   e.kinetic = deterministic_sum(s.size(), [&](std::size_t p) {
     double v2 = 0;
-    for (int d = 0; d < Dim; ++d) v2 += s.column(Field::velocity, d)[p] * s.column(Field::velocity, d)[p];
+    for (int d = 0; d < Dim; ++d) v2 += v[d][p] * v[d][p];
     return 0.5 * m[p] * v2;
   });
   e.strain = std::visit(
       [&](const auto& mat) {
         return deterministic_sum(s.size(), [&](std::size_t p) {
           double F[Dim * Dim];
-          for (int c = 0; c < Dim * Dim; ++c) F[c] = s.column(Field::deformation, c)[p];
+          for (int c = 0; c < Dim * Dim; ++c) F[c] = F_col[c][p];
           return V0[p] * mat.template energy_density<Dim>(F);
         });
       },

@@ -134,7 +134,7 @@ struct UniformAxis {
 
   UniformAxis(int cells_, double length) : inv_h(cells_ / length), cells(cells_) {}
 
-  AxisWeights<S> operator()(double x) const {
+  [[gnu::always_inline]] AxisWeights<S> operator()(double x) const {
     // coefficient table [span class][function][a, b, c]; class = (first cell) + 2 (last cell)
     static constexpr double quadratic[4][3][3] = {
         {{0.5, -1.0, 0.5}, {0.5, 1.0, -1.0}, {0.0, 0.0, 0.5}},  // interior: uniform B-spline pieces
@@ -143,8 +143,9 @@ struct UniformAxis {
         {{1.0, -2.0, 1.0}, {0.0, 2.0, -2.0}, {0.0, 0.0, 1.0}},  // one cell: Bernstein polynomials
     };
     static constexpr double linear[2][3] = {{1.0, -1.0, 0.0}, {0.0, 1.0, 0.0}};
+    // the cell, clamped to the grid: floor(s) without the libm call (s ≤ 0, and NaN, give cell 0)
     const double s = x * inv_h;
-    const int c = std::clamp(static_cast<int>(std::floor(s)), 0, cells - 1);
+    const int c = s > 0.0 ? std::min(static_cast<int>(std::min(s, double(cells))), cells - 1) : 0;
     const double xi = s - c;
     AxisWeights<S> a;
     a.first = c;

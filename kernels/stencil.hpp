@@ -1,11 +1,48 @@
 #pragma once
 // Tensor-product stencils: the S^Dim basis functions non-zero at a point, with their gradients.
 // Keeps the index arithmetic out of the transfer kernels, which then read like the paper's sums.
+//
+// A stencil is a set of rows along axis 0 (one row in 1D, S rows in 2D). A row's axis-0 weights are padded with
+// zeros to `stencil_lanes<S>` (a whole number of SIMD registers: 3 → 4) and held as one SIMD vector
+// (std::experimental::simd, GCC's Parallelism TS v2: two SSE2 registers in a portable build, one AVX register with
+// MPM_NATIVE), so the hot kernels handle a row of contiguous DOFs in a few vector instructions. The compiler does
+// not find this by itself: it unrolls the 3-node loops and packs them poorly (measured 1.4× slower scatter). The padding lane adds 0.0 to the DOF just
+// past the stencil: the grid reserves ghost columns for it (grid_stride) and the coloured blocks are wide enough
+// that it never belongs to a block of the same colour (cell_bins.hpp), so no scatter races on it.
 #include <array>
+#include <experimental/simd>
 
 #include "kernels/bspline.hpp"
 
+#define MPM_INLINE [[gnu::always_inline]] inline
+
 namespace mpm {
+
+/// DOFs per stencil row in the kernels' inner loops: the stencil width rounded up to an even count.
+template <int S>
+inline constexpr int stencil_lanes = S + S % 2;
+
+/// Functions per grid row in memory: the functions along axis 0 plus the ghost columns of the padding lanes of a
+/// stencil `width` functions wide.
+constexpr int grid_stride(int functions0, int width) { return functions0 + width % 2; }
+
+/// One stencil row of weights or grid values, a SIMD vector of stencil_lanes<S> doubles.
+template <int S>
+using RowVector = std::experimental::fixed_size_simd<double, stencil_lanes<S>>;
+
+/// The row of grid values starting at p (any alignment).
+template <class V>
+MPM_INLINE V load_row(const double* p) {
+  return V(p, std::experimental::element_aligned);
+}
+
+/// p[0..lanes) += x.
+template <class V>
+MPM_INLINE void add_to_row(double* p, const V& x) {
+  V y = load_row<V>(p);
+  y += x;
+  y.copy_to(p, std::experimental::element_aligned);
+}
 
 /// A basis on a Dim-dimensional grid: one axis basis per axis (UniformAxis or CoxDeBoorAxis), all of width S.
 template <int Dim, class Axis>
@@ -16,36 +53,54 @@ struct TensorBasis {
   std::array<int, Dim> functions;  ///< number of basis functions per axis (DOFs = product)
 };
 
-/// The stencil of one point: per axis the first function index, values and derivatives.
+/// The stencil of one point: the DOF of its first node, the padded axis-0 weights and the axis-1 weights.
 template <int Dim, int S>
 struct Stencil {
-  std::array<AxisWeights<S>, Dim> a;
+  int first0 = 0, first1 = 0;  ///< first function index per axis
+  RowVector<S> wx, dwx;         ///< axis 0: φ and dφ/dx, zero in the padding lanes
+  double wy[S], dwy[S];         ///< axis 1 (2D only)
 };
 
 template <int Dim, int S, class Axis>
-inline Stencil<Dim, S> stencil_at(const TensorBasis<Dim, Axis>& basis, const double* x) {
+MPM_INLINE Stencil<Dim, S> stencil_at(const TensorBasis<Dim, Axis>& basis, const double* x) {
   Stencil<Dim, S> st;
-  for (int d = 0; d < Dim; ++d) st.a[d] = basis.axis[d](x[d]);
+  const AxisWeights<S> a = basis.axis[0](x[0]);
+  st.first0 = a.first;
+  st.wx = RowVector<S>([&](int i) { return i < S ? a.w[i] : 0.0; });
+  st.dwx = RowVector<S>([&](int i) { return i < S ? a.dw[i] : 0.0; });
+  if constexpr (Dim == 2) {
+    const AxisWeights<S> b = basis.axis[1](x[1]);
+    st.first1 = b.first;
+    for (int j = 0; j < S; ++j) {
+      st.wy[j] = b.w[j];
+      st.dwy[j] = b.dw[j];
+    }
+  }
   return st;
 }
 
-/// Calls f(dof, weight, gradient) for every DOF of the stencil, in a fixed order (axis 0 fastest).
-/// `stride1` is the number of functions along axis 0 (DOF = i0 + stride1 * i1).
+/// Calls f(dof, wy, dwy) for every row of the stencil: `dof` is the row's first DOF, (wy, dwy) the axis-1 factor
+/// of its weights (1 and 0 in 1D). Node i of the row has weight wx[i]·wy and gradient (dwx[i]·wy, wx[i]·dwy).
+/// `stride` is the grid's row length in memory (grid_stride).
 template <int Dim, int S, class F>
-inline void for_each_node(const Stencil<Dim, S>& st, int stride1, F&& f) {
+MPM_INLINE void for_each_row(const Stencil<Dim, S>& st, int stride, F&& f) {
   if constexpr (Dim == 1) {
-    const auto& a = st.a[0];
-    for (int i = 0; i < S; ++i) f(a.first + i, a.w[i], std::array<double, 1>{a.dw[i]});
+    f(st.first0, 1.0, 0.0);
   } else {
     static_assert(Dim == 2, "dimension 1 or 2");
-    const auto& a = st.a[0];
-    const auto& b = st.a[1];
-    for (int j = 0; j < S; ++j) {
-      const int row = (b.first + j) * stride1 + a.first;
-      for (int i = 0; i < S; ++i)
-        f(row + i, a.w[i] * b.w[j], std::array<double, 2>{a.dw[i] * b.w[j], a.w[i] * b.dw[j]});
-    }
+    for (int j = 0; j < S; ++j) f((st.first1 + j) * stride + st.first0, st.wy[j], st.dwy[j]);
   }
+}
+
+/// Calls f(dof, weight, gradient) for every node of the stencil (no padding), in a fixed order (axis 0 fastest).
+template <int Dim, int S, class F>
+MPM_INLINE void for_each_node(const Stencil<Dim, S>& st, int stride, F&& f) {
+  for_each_row(st, stride, [&](int row, double wy, double dwy) {
+    for (int i = 0; i < S; ++i) {
+      if constexpr (Dim == 1) f(row + i, st.wx[i], std::array<double, 1>{st.dwx[i]});
+      else f(row + i, st.wx[i] * wy, std::array<double, 2>{st.dwx[i] * wy, st.wx[i] * dwy});
+    }
+  });
 }
 
 }  // namespace mpm

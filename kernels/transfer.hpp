@@ -122,15 +122,17 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, cons
         for (int d = 0; d < Dim; ++d) mb[d] = mp * b[d];
       }
     }
-    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>& dw) {
-      if constexpr (Fields.mass) g.m[i] += w * mp;
+    for_each_row(st, g.stride1, [&](int row, double wy, double dwy) {
+      const RowVector<S> w = st.wx * wy;
+      const RowVector<S> dw[2] = {st.dwx * wy, st.wx * dwy};  // ∇φ (the second only in 2D)
+      if constexpr (Fields.mass) add_to_row(g.m + row, w * mp);
       if constexpr (Fields.momentum)
-        for (int d = 0; d < Dim; ++d) g.q[d][i] += w * mv[d];
+        for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, w * mv[d]);
       if constexpr (Fields.force)
         for (int d = 0; d < Dim; ++d) {
-          double fi = w * mb[d];
+          RowVector<S> fi = w * mb[d];
           for (int l = 0; l < Dim; ++l) fi -= dw[l] * Vsig[l][d];
-          g.f[d][i] += fi;
+          add_to_row(g.f[d] + row, fi);
         }
     });
   }
@@ -151,20 +153,20 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
     double xp[Dim];
     for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
     const auto st = stencil_at<Dim, S>(basis, xp);
-    double ap[Dim] = {};
-    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>&) {
-      for (int d = 0; d < Dim; ++d) ap[d] += w * g.a[d][i];
+    RowVector<S> ap[Dim] = {};
+    for_each_row(st, g.stride1, [&](int row, double wy, double) {
+      for (int d = 0; d < Dim; ++d) ap[d] += st.wx * wy * load_row<RowVector<S>>(g.a[d] + row);
     });
     const double mp = p.m[ip];
     double vp[Dim], mv[Dim];
     for (int d = 0; d < Dim; ++d) {
-      vp[d] = p.v[d][ip] + dt * ap[d];
+      vp[d] = p.v[d][ip] + dt * reduce(ap[d]);
       p.v[d][ip] = vp[d];
       mv[d] = mp * vp[d];
     }
     totals.add(mp, vp);
-    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>&) {
-      for (int d = 0; d < Dim; ++d) g.q[d][i] += w * mv[d];
+    for_each_row(st, g.stride1, [&](int row, double wy, double) {
+      for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, st.wx * wy * mv[d]);
     });
   }
   return totals;
@@ -172,35 +174,40 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
 
 /// G2P over particles [begin, end): the selected updates; `stress(F, s)` is the constitutive law (σ from F).
 template <GatherFields Fields, int Dim, int S, class Axis, class Stress>
-inline void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p, const GridView<Dim>& g,
+MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p, const GridView<Dim>& g,
                        std::size_t begin, std::size_t end, double dt, const Stress& stress, ParticleGuard& guard) {
   for (std::size_t ip = begin; ip < end; ++ip) {
     double xp[Dim];
     for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
     const auto st = stencil_at<Dim, S>(basis, xp);
-    double ap[Dim] = {}, vp[Dim] = {}, L[Dim][Dim] = {};
-    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>& dw) {
+    // sums over the stencil per lane, reduced at the end: ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
+    RowVector<S> ap[Dim] = {}, vp[Dim] = {}, grad_v[Dim * Dim] = {};
+    for_each_row(st, g.stride1, [&](int row, double wy, double dwy) {
+      const RowVector<S> w = st.wx * wy;
+      const RowVector<S> dw[2] = {st.dwx * wy, st.wx * dwy};
       for (int d = 0; d < Dim; ++d) {
-        if constexpr (Fields.velocity) ap[d] += w * g.a[d][i];
+        if constexpr (Fields.velocity) ap[d] += w * load_row<RowVector<S>>(g.a[d] + row);
         if constexpr (Fields.position || Fields.deformation) {
-          const double vi = g.v[d][i];
+          const auto vi = load_row<RowVector<S>>(g.v[d] + row);
           if constexpr (Fields.position) vp[d] += w * vi;
           if constexpr (Fields.deformation)
-            for (int l = 0; l < Dim; ++l) L[d][l] += vi * dw[l];  // ∇v_p = Σ v_i ⊗ ∇φ_i
+            for (int l = 0; l < Dim; ++l) grad_v[d * Dim + l] += vi * dw[l];
         }
       }
     });
     if constexpr (Fields.velocity)
-      for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * ap[d];
+      for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * reduce(ap[d]);
     if constexpr (Fields.position)
-      for (int d = 0; d < Dim; ++d) p.x[d][ip] += dt * vp[d];
+      for (int d = 0; d < Dim; ++d) p.x[d][ip] += dt * reduce(vp[d]);
     if constexpr (Fields.deformation) {
       double F[Dim * Dim], Fn[Dim * Dim];
       for (int c = 0; c < Dim * Dim; ++c) F[c] = p.F[c][ip];
+      double L[Dim * Dim];
+      for (int c = 0; c < Dim * Dim; ++c) L[c] = reduce(grad_v[c]);
       for (int a = 0; a < Dim; ++a)
         for (int b = 0; b < Dim; ++b) {
           double sum = F[a * Dim + b];
-          for (int c = 0; c < Dim; ++c) sum += dt * L[a][c] * F[c * Dim + b];
+          for (int c = 0; c < Dim; ++c) sum += dt * L[a * Dim + c] * F[c * Dim + b];
           Fn[a * Dim + b] = sum;
         }
       for (int c = 0; c < Dim * Dim; ++c) p.F[c][ip] = Fn[c];
@@ -227,13 +234,14 @@ inline void apply_consistent_mass(const TensorBasis<Dim, Axis>& basis, const Par
     double xp[Dim];
     for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
     const auto st = stencil_at<Dim, S>(basis, xp);
-    double sp[Dim] = {};
-    for_each_node(st, stride1, [&](int i, double w, const std::array<double, Dim>&) {
-      for (int d = 0; d < Dim; ++d) sp[d] += w * x[d][i];
+    RowVector<S> xp_lanes[Dim] = {};
+    for_each_row(st, stride1, [&](int row, double wy, double) {
+      for (int d = 0; d < Dim; ++d) xp_lanes[d] += st.wx * wy * load_row<RowVector<S>>(x[d] + row);
     });
-    const double mp = p.m[ip];
-    for_each_node(st, stride1, [&](int i, double w, const std::array<double, Dim>&) {
-      for (int d = 0; d < Dim; ++d) y[d][i] += w * mp * sp[d];
+    double mx[Dim];  // m_p Σ_j φ_j x_j
+    for (int d = 0; d < Dim; ++d) mx[d] = p.m[ip] * reduce(xp_lanes[d]);
+    for_each_row(st, stride1, [&](int row, double wy, double) {
+      for (int d = 0; d < Dim; ++d) add_to_row(y[d] + row, st.wx * wy * mx[d]);
     });
   }
 }
