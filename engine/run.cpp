@@ -1,5 +1,6 @@
 #include "engine/run.hpp"
 
+#include <sys/resource.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -51,6 +52,13 @@ class Progress {
   Clock::time_point start_;
   double last_ = 0.0;
 };
+
+/// Peak resident set of this process so far (getrusage: the kernel's high-water mark, in KiB on Linux).
+double peak_resident_bytes() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return 1024.0 * static_cast<double>(usage.ru_maxrss);
+}
 
 /// SIGINT / SIGTERM request a clean stop (checkpoint, close the file) at the end of the current step.
 std::atomic<int> stop_signal{0};
@@ -234,6 +242,9 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
   j["pipeline"] = sim.pipeline();
   j["columns"] = sim.particles().column_names();
   j["bytes_per_particle"] = sim.particles().bytes_per_particle();
+  const double rss = peak_resident_bytes();
+  j["peak_rss_bytes"] = rss;
+  j["peak_rss_bytes_per_particle"] = rss / static_cast<double>(sim.particles().size());
   if (out) {
     out->set_attribute("summary", j.dump());
     out->close();

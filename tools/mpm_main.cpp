@@ -55,6 +55,8 @@ void print_report(const nlohmann::json& s) {
                 s["errors"]["stress_rms"].get<double>());
   std::printf("conservation (max relative, particles vs grid): mass %.3e  momentum %.3e\n",
               s["conservation"]["mass_rel_max"].get<double>(), s["conservation"]["momentum_rel_max"].get<double>());
+  std::printf("peak memory: %.1f MB, %.0f bytes per particle\n", s["peak_rss_bytes"].get<double>() / 1e6,
+              s["peak_rss_bytes_per_particle"].get<double>());
   if (s.contains("output")) std::printf("output: %s\n", s["output"].get<std::string>().c_str());
 }
 
