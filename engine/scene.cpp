@@ -576,8 +576,8 @@ void read_bodies(const Node& top, Scene& s) {
   // one global spline through the particles of separate bodies would bridge the gaps between them (thesis §3.2
   // reconstructs one body)
   if (s.algorithm.mapping == Mapping::cubic_spline && s.bodies.size() > 1)
-    fail("bodies", *b, "one body with algorithm.mapping = \"cubic-spline\" (it reconstructs one body); or mapping "
-                       "\"direct\", \"mls\" or \"tls\"");
+    fail("bodies", *b, "expected one body with algorithm.mapping = \"cubic-spline\" (one spline per body), or "
+                       "mapping \"direct\", \"mls\" or \"tls\"");
 }
 
 /// A scene's own list of fixed sides replaces the problem's.
