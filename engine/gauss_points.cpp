@@ -34,22 +34,35 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene)
     h_[d] = scene.grid.length[d] / cells_[d];
     ncells *= cells_[d];
   }
-  // tensor-product Gauss–Legendre rule of the unit cell (paper eqs 22–25, thesis eq. 3.3)
-  std::array<GaussRule, Dim> rules;
-  for (int d = 0; d < Dim; ++d) rules[d] = gauss_legendre(scene.algorithm.gauss_per_cell[d]);
-  const int n0 = rules[0].x.size(), n1 = Dim > 1 ? rules[Dim - 1].x.size() : 1;
-  for (int j = 0; j < n1; ++j)
-    for (int i = 0; i < n0; ++i) {
-      std::array<double, Dim> xi;
-      xi[0] = rules[0].x[i];
-      double w = rules[0].w[i];
-      if constexpr (Dim > 1) {
-        xi[1] = rules[1].x[j];
-        w *= rules[1].w[j];
+  if (mapping_ == Mapping::cubic_spline) {
+    // Gauss points in each half of the knot span (thesis §3.2.3, Fig. 3.4): 2 per half integrate a cubic
+    // exactly on each half, whatever the spline's knots (the particles) do inside the span
+    half_rule_ = gauss_legendre(scene.algorithm.gauss_per_cell[0]);
+    for (int half = 0; half < 2; ++half)
+      for (std::size_t j = 0; j < half_rule_.x.size(); ++j) {
+        std::array<double, Dim> xi{};
+        xi[0] = 0.5 * (half + half_rule_.x[j]);
+        local_.push_back(xi);
+        local_w_.push_back(0.5 * half_rule_.w[j]);
       }
-      local_.push_back(xi);
-      local_w_.push_back(w);
-    }
+  } else {
+    // tensor-product Gauss–Legendre rule of the unit cell (paper eqs 22–25, thesis eq. 3.3)
+    std::array<GaussRule, Dim> rules;
+    for (int d = 0; d < Dim; ++d) rules[d] = gauss_legendre(scene.algorithm.gauss_per_cell[d]);
+    const int n0 = rules[0].x.size(), n1 = Dim > 1 ? rules[Dim - 1].x.size() : 1;
+    for (int j = 0; j < n1; ++j)
+      for (int i = 0; i < n0; ++i) {
+        std::array<double, Dim> xi;
+        xi[0] = rules[0].x[i];
+        double w = rules[0].w[i];
+        if constexpr (Dim > 1) {
+          xi[1] = rules[1].x[j];
+          w *= rules[1].w[j];
+        }
+        local_.push_back(xi);
+        local_w_.push_back(w);
+      }
+  }
   per_cell_ = static_cast<int>(local_.size());
   const std::size_t n = ncells * per_cell_;
   m_.assign(n, 0.0);
@@ -67,6 +80,43 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene)
   std::array<const double*, Dim> x;
   for (int d = 0; d < Dim; ++d) x[d] = x_[d].data();
   bins_.bin(x, n);  // Gauss points never move: binned once
+}
+
+template <int Dim>
+MomentumTotals<Dim> GaussPoints<Dim>::sort_by_position(const ParticleView<Dim>& p, const CellBins<Dim>& cells) {
+  // cell by cell (the bins are colour-major, so their order is not the cells'), then an insertion sort by x
+  // within: particles of a 1D body keep their order almost always, so this is O(n) in practice and stable
+  const unsigned* order = cells.order().data();
+  sorted_.clear();
+  cell_totals_.assign(cells_[0], MomentumTotals<Dim>{});
+  for (std::size_t c = 0; c < static_cast<std::size_t>(cells_[0]); ++c) {
+    const auto [b, e] = cells.block_range(c);
+    for (std::size_t k = b; k < e; ++k) {
+      const unsigned ip = order[k];
+      double v[Dim];
+      for (int d = 0; d < Dim; ++d) v[d] = p.v[d][ip];
+      cell_totals_[c].add(p.m[ip], v);
+      std::size_t i = sorted_.size();
+      sorted_.push_back(ip);
+      for (; i > 0 && p.x[0][sorted_[i - 1]] > p.x[0][ip]; --i) sorted_[i] = sorted_[i - 1];
+      sorted_[i] = ip;
+    }
+  }
+  return sum_totals(cell_totals_);
+}
+
+template <int Dim>
+void GaussPoints<Dim>::place_half_span(std::size_t c, int half, double lo, double hi, double* w) {
+  const double a = cell_box(c).lo[0] + 0.5 * half * h_[0];
+  const double a_in = std::max(a, lo), b_in = std::min(a + 0.5 * h_[0], hi);
+  const int n = static_cast<int>(half_rule_.x.size());
+  // the part of the half inside the body gets the whole rule (its points stay in cell c, so the binning holds)
+  const bool inside = b_in > a_in;
+  for (int j = 0; j < n; ++j) {
+    const std::size_t g = c * per_cell_ + half * n + j;
+    x_[0][g] = inside ? a_in + half_rule_.x[j] * (b_in - a_in) : a + half_rule_.x[j] * 0.5 * h_[0];
+    w[j] = inside ? half_rule_.w[j] * (b_in - a_in) : 0.0;
+  }
 }
 
 template <int Dim>

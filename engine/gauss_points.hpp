@@ -5,13 +5,20 @@
 // take the particles' place in the P2G scatter. Gauss points never move: they are binned into coloured blocks
 // once. TLS fixes each cell's first Taylor coefficient from the particle sums, so the grid receives exactly
 // Σ m_p and Σ m_p v_p (Gauss rules with ≥ 2 points per axis integrate the quadratic Taylor basis exactly).
+//
+// The cubic-spline (CS) mapping (1D, thesis §3.2) reconstructs globally instead: one cubic spline per field
+// through all particles of the body, evaluated at `gauss_per_cell` Gauss points in each half of every knot
+// span (thesis §3.2.3, Fig. 3.4: two per half), restricted to the body's current extent. It is the thesis'
+// non-conservative comparison method: ∫ρ̂ and ∫ρv̂ differ from Σ m_p and Σ m_p v_p by the interpolation error.
 #include <array>
+#include <stdexcept>
 #include <vector>
 
 #include <tbb/parallel_for.h>
 
 #include "engine/cell_bins.hpp"
 #include "engine/scene.hpp"
+#include "kernels/cubic_spline.hpp"
 #include "kernels/mls.hpp"
 #include "kernels/quadrature.hpp"
 #include "kernels/taylor_ls.hpp"
@@ -70,8 +77,14 @@ class GaussPoints {
   ParticleView<Dim> mass_view();
   const CellBins<Dim>& bins() const { return bins_; }
   const FallbackCounts& fallbacks() const { return fallbacks_; }
-  /// The reconstruction's name in the pipeline's stage names ("tls", "mls").
-  const char* name() const { return mapping_ == Mapping::mls ? "mls" : "tls"; }
+  /// The reconstruction's name in the pipeline's stage names ("tls", "mls", "cubic-spline").
+  const char* name() const {
+    switch (mapping_) {
+      case Mapping::mls: return "mls";
+      case Mapping::cubic_spline: return "cubic-spline";
+      default: return "tls";
+    }
+  }
 
  private:
   template <int Degree, class Body>
@@ -80,6 +93,20 @@ class GaussPoints {
   template <class Body>
   MomentumTotals<Dim> rebuild_mls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body,
                                   bool stress);
+  template <class Body>
+  MomentumTotals<Dim> rebuild_cubic_spline(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
+                                           const Body& body, bool stress);
+  /// The particles in order of position (1D), into sorted_; their totals Σ m_p v_p, Σ m_p |v_p|.
+  MomentumTotals<Dim> sort_by_position(const ParticleView<Dim>& p, const CellBins<Dim>& cells);
+  /// Places the Gauss points of half `half` of cell c on its part inside [lo, hi] (thesis Fig. 3.4); returns
+  /// their weights into `w` (all zero when the half lies outside).
+  void place_half_span(std::size_t c, int half, double lo, double hi, double* w);
+  /// Zeroes what Gauss point g carries.
+  void clear_point(std::size_t g) {
+    m_[g] = 0.0;
+    for (int d = 0; d < Dim; ++d) q_[d][g] = fb_[d][g] = 0.0;
+    for (auto& col : s_) col[g] = 0.0;
+  }
   CellBox<Dim> cell_box(std::size_t cell) const;
 
   Mapping mapping_;
@@ -95,6 +122,12 @@ class GaussPoints {
   std::array<std::vector<double>, sym_components<Dim>> s_;
   CellBins<Dim> bins_;
   FallbackCounts fallbacks_;
+  // cubic-spline mapping only (1D)
+  GaussRule half_rule_;                                    ///< Gauss rule of a half knot span, on [0, 1]
+  std::vector<unsigned> sorted_;                           ///< particle indices by position
+  std::vector<MomentumTotals<Dim>> cell_totals_;
+  CubicSpline<1 + Dim> mass_spline_;                       ///< ρ, ρv
+  CubicSpline<sym_components<Dim> + Dim> stress_spline_;   ///< σ, ρb
 };
 
 }  // namespace mpm
@@ -143,6 +176,7 @@ template <class Body>
 MomentumTotals<Dim> GaussPoints<Dim>::rebuild(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
                                               const Body& body, bool stress) {
   if (mapping_ == Mapping::mls) return rebuild_mls(p, cells, body, stress);
+  if (mapping_ == Mapping::cubic_spline) return rebuild_cubic_spline(p, cells, body, stress);
   switch (tls_degree_) {
     case 0: return rebuild_tls<0>(p, cells, body, stress);
     case 1: return rebuild_tls<1>(p, cells, body, stress);
@@ -155,7 +189,8 @@ template <int Dim, class Body>
 struct ParticleFields {
   const ParticleView<Dim>* p;
   const Body* body;
-  double rho(std::size_t ip) const { return p->m[ip] / (det(*p, ip) * p->V0[ip]); }
+  double volume(std::size_t ip) const { return det(*p, ip) * p->V0[ip]; }  // V_p = J_p V0_p (eq. 2.42)
+  double rho(std::size_t ip) const { return p->m[ip] / volume(ip); }
   Eigen::Matrix<double, 1 + Dim, 1> mass(std::size_t ip) const {
     Eigen::Matrix<double, 1 + Dim, 1> f;
     f[0] = rho(ip);
@@ -235,11 +270,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     const auto own_range = cells.block_range(c);
     const std::size_t first = c * per_cell_;
     if (own_range.first == own_range.second) {  // an empty cell carries nothing: nothing to conserve there
-      for (int g = 0; g < per_cell_; ++g) {
-        m_[first + g] = 0.0;
-        for (int d = 0; d < Dim; ++d) q_[d][first + g] = fb_[d][first + g] = 0.0;
-        for (auto& col : s_) col[first + g] = 0.0;
-      }
+      for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
       return;
     }
     MassSource own{&p, order, mass_of};
@@ -319,11 +350,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_mls(const ParticleView<Dim>& p, co
   tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
     const auto own_range = cells.block_range(c);
     const std::size_t first = c * per_cell_;
-    for (int g = 0; g < per_cell_; ++g) {
-      m_[first + g] = 0.0;
-      for (int d = 0; d < Dim; ++d) q_[d][first + g] = fb_[d][first + g] = 0.0;
-      for (auto& col : s_) col[first + g] = 0.0;
-    }
+    for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
     if (own_range.first == own_range.second) return;
     for (std::size_t k = own_range.first; k < own_range.second; ++k) {
       const std::size_t ip = order[k];
@@ -366,6 +393,59 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_mls(const ParticleView<Dim>& p, co
   });
   for (const auto& c : counts) fallbacks_ += c;
   return sum_totals(totals);
+}
+
+template <int Dim>
+template <class Body>
+MomentumTotals<Dim> GaussPoints<Dim>::rebuild_cubic_spline(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
+                                                           const Body& body, bool stress) {
+  if constexpr (Dim != 1) {
+    throw std::logic_error("GaussPoints: the cubic-spline mapping is 1D only (the scene refuses it in 2D)");
+  } else {
+    const MomentumTotals<Dim> totals = sort_by_position(p, cells);
+    const ParticleFields<Dim, Body> fields{&p, &body};
+    // Particles closer than this are one data point (kernels/cubic_spline.hpp): far below any spacing a run
+    // survives, far above the round-off of positions.
+    const double merge = 1e-10 * h_[0];
+    mass_spline_.clear();
+    stress_spline_.clear();
+    for (const unsigned ip : sorted_) {  // the particles are the data points (thesis §3.2.1)
+      mass_spline_.push(p.x[0][ip], fields.mass(ip), merge);
+      if (stress) stress_spline_.push(p.x[0][ip], fields.stress(ip), merge);
+    }
+    // natural end conditions, as in the thesis (§3.2.1: z''(x_1) = z''(x_M) = 0)
+    mass_spline_.fit(SplineEnd::natural);
+    if (stress) stress_spline_.fit(SplineEnd::natural);
+    // A single data point makes the spline the constant through it: still a reconstruction, but a degenerate one
+    // the summary should show.
+    if (mass_spline_.size() < 2) ++fallbacks_.constant;
+    // The body's current extent: the end particles' domains, x_p ∓ V_p/2, reach the body's ends, and the
+    // spline is extrapolated there (thesis Fig. 3.3); outside it no Gauss point carries anything.
+    const unsigned first = sorted_.front(), last = sorted_.back();
+    const double lo = p.x[0][first] - 0.5 * fields.volume(first);
+    const double hi = p.x[0][last] + 0.5 * fields.volume(last);
+    const int n = static_cast<int>(half_rule_.x.size());
+    tbb::parallel_for(std::size_t(0), static_cast<std::size_t>(cells_[0]), [&](std::size_t c) {
+      for (int half = 0; half < 2; ++half) {
+        double w[16];  // ≤ 10 points per half (scene range of gauss_per_cell)
+        place_half_span(c, half, lo, hi, w);
+        for (int j = 0; j < n; ++j) {
+          const std::size_t g = c * per_cell_ + half * n + j;
+          clear_point(g);
+          if (w[j] == 0.0) continue;
+          // ρ̂ω and ρv̂ω (thesis eqs 3.8–3.9), σ̂ω and ρb̂ω (eq. 3.7)
+          const auto mv = mass_spline_(x_[0][g]);
+          m_[g] = w[j] * mv[0];
+          q_[0][g] = w[j] * mv[1];
+          if (!stress) continue;
+          const auto sv = stress_spline_(x_[0][g]);
+          s_[0][g] = w[j] * sv[0];
+          fb_[0][g] = w[j] * sv[1];
+        }
+      }
+    });
+    return totals;
+  }
 }
 
 }  // namespace mpm

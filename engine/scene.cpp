@@ -573,6 +573,11 @@ void read_bodies(const Node& top, Scene& s) {
     if (const json* m = bn.find("material")) body.material = read_material(m, bn.at("material"), s.material);
     s.bodies.push_back(body);
   }
+  // one global spline through the particles of separate bodies would bridge the gaps between them (thesis §3.2
+  // reconstructs one body)
+  if (s.algorithm.mapping == Mapping::cubic_spline && s.bodies.size() > 1)
+    fail("bodies", *b, "expected one body with algorithm.mapping = \"cubic-spline\" (one spline per body), or "
+                       "mapping \"direct\", \"mls\" or \"tls\"");
 }
 
 /// A scene's own list of fixed sides replaces the problem's.

@@ -1,5 +1,6 @@
 #pragma once
 // Scenes of the verification problems, built in code so each test states the settings it depends on.
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -36,6 +37,29 @@ inline nlohmann::json plate_scene(int cells, double amplitude = 0.05, const std:
 template <int Dim>
 void run_to_end(Simulation<Dim>& sim) {
   while (!sim.finished()) sim.step();
+}
+
+/// What a verification test reads from a bar run.
+struct BarResult {
+  RunErrors errors;
+  Conservation conservation;
+  double end_stress_error;  ///< largest stress error of the two end particles
+};
+
+/// Runs the bar of thesis Table 5.2 (bar_scene) to the end with the given mapping.
+inline BarResult run_bar(int cells, const std::string& basis, const std::string& mass,
+                         const std::string& update = "musl", const std::string& mapping = "direct") {
+  auto scene = bar_scene(cells, basis, mass, update);
+  scene["algorithm"]["mapping"] = mapping;
+  Simulation<1> sim(parse_scene(scene));
+  run_to_end(sim);
+  const auto& s = sim.particles();
+  const auto X = s.column(Field::reference), sigma = s.column(Field::stress);
+  const auto exact_source = make_problem<1>(sim.scene());
+  double end_error = 0.0;
+  for (std::size_t p : {std::size_t(0), s.size() - 1})
+    end_error = std::max(end_error, std::abs(sigma[p] - exact_source->exact({X[p]}, sim.time()).sigma[0]));
+  return {sim.errors(), sim.conservation(), end_error};
 }
 
 /// Observed order of convergence between two resolutions (cell size halved: ratio 2).

@@ -9,27 +9,6 @@ using namespace mpm::test;
 
 namespace {
 
-struct BarResult {
-  RunErrors errors;
-  Conservation conservation;
-  double end_stress_error;  ///< largest stress error of the two end particles
-};
-
-BarResult run_bar(int cells, const std::string& basis, const std::string& mass, const std::string& update = "musl",
-                  const std::string& mapping = "direct") {
-  auto scene = bar_scene(cells, basis, mass, update);
-  scene["algorithm"]["mapping"] = mapping;
-  Simulation<1> sim(parse_scene(scene));
-  run_to_end(sim);
-  const auto& s = sim.particles();
-  const auto X = s.column(Field::reference), sigma = s.column(Field::stress);
-  const auto exact_source = make_problem<1>(sim.scene());
-  double end_error = 0.0;
-  for (std::size_t p : {std::size_t(0), s.size() - 1})
-    end_error = std::max(end_error, std::abs(sigma[p] - exact_source->exact({X[p]}, sim.time()).sigma[0]));
-  return {sim.errors(), sim.conservation(), end_error};
-}
-
 void require_conserved(const Conservation& c) {
   CHECK(c.mass_rel_max <= 1e-13);
   CHECK(c.momentum_rel_max <= 1e-13);

@@ -38,6 +38,10 @@ assert set(s["errors"]) == {"displacement_rms", "velocity_rms", "stress_rms"}
 assert s["conservation"]["mass_rel_max"] <= 1e-13
 assert os.path.exists("run.h5") and os.path.exists("run.xdmf") and not os.path.exists("run.h5.partial")
 PY
+# the 1D cubic-spline mapping (thesis §3.2) runs and names its stages; refused in 2D naming the key
+expect 0 "errors \(RMS\)" -- "$mpm" run "$scenes/bar.json" --set algorithm.mapping=cubic-spline --summary cs.json
+grep -q '"cubic-spline-rebuild+p2g-mass"' cs.json && pass=$((pass+1)) || { echo "FAIL: cubic-spline stages"; fail=$((fail+1)); }
+expect 2 "algorithm.mapping" -- "$mpm" validate "$scenes/plate.json" --set algorithm.mapping=cubic-spline
 # a particle leaving the grid: exit 3, a precise reason, the output file still written
 cat > escape.json <<'J'
 {"dimension": 2, "grid": {"length": [1, 1], "cells": [10, 10]},
