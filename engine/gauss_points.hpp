@@ -108,6 +108,23 @@ class GaussPoints {
     for (auto& col : s_) col[g] = 0.0;
   }
   CellBox<Dim> cell_box(std::size_t cell) const;
+  /// Calls f(n) for every cell n within `reach` cells of cell c along each axis (c included), row-major order.
+  template <class F>
+  void for_each_cell_near(std::size_t c, int reach, F&& f) const {
+    std::array<int, Dim> ci;
+    std::size_t rest = c;
+    for (int d = 0; d < Dim; ++d) {
+      ci[d] = static_cast<int>(rest % cells_[d]);
+      rest /= cells_[d];
+    }
+    const int span1 = Dim > 1 ? reach : 0;
+    for (int j = -span1; j <= span1; ++j)
+      for (int i = -reach; i <= reach; ++i) {
+        const int a = ci[0] + i, b = Dim > 1 ? ci[Dim - 1] + j : 0;
+        if (a < 0 || a >= cells_[0] || (Dim > 1 && (b < 0 || b >= cells_[Dim - 1]))) continue;
+        f(Dim > 1 ? a + static_cast<std::size_t>(cells_[0]) * b : static_cast<std::size_t>(a));
+      }
+  }
 
   Mapping mapping_;
   int tls_degree_;
@@ -197,6 +214,12 @@ struct ParticleFields {
     for (int d = 0; d < Dim; ++d) f[1 + d] = f[0] * p->v[d][ip];
     return f;
   }
+  Eigen::Matrix<double, 1, 1> density(std::size_t ip) const { return Eigen::Matrix<double, 1, 1>(rho(ip)); }
+  Eigen::Matrix<double, Dim, 1> velocity(std::size_t ip) const {
+    Eigen::Matrix<double, Dim, 1> v;
+    for (int d = 0; d < Dim; ++d) v[d] = p->v[d][ip];
+    return v;
+  }
   Eigen::Matrix<double, sym_components<Dim> + Dim, 1> stress(std::size_t ip) const {
     Eigen::Matrix<double, sym_components<Dim> + Dim, 1> f;
     for (int c = 0; c < sym_components<Dim>; ++c) f[c] = p->s[c][ip];
@@ -207,17 +230,6 @@ struct ParticleFields {
     return f;
   }
 };
-
-/// A fit of degree 0 written in the basis of degree D (the higher coefficients zero).
-template <int D, int Dim, int K>
-TaylorFit<Dim, D, K> as_degree(const TaylorFit<Dim, 0, K>& f) {
-  TaylorFit<Dim, D, K> r;
-  r.cell = f.cell;
-  r.c.row(0) = f.c.row(0);
-  r.status = f.status;
-  if (D > 0) r.status.stage = FitStage::full;  // counted by the caller as a degree fallback
-  return r;
-}
 
 namespace detail {
 
@@ -254,12 +266,11 @@ template <int Dim>
 template <int Degree, class Body>
 MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
                                                   const Body& body, bool stress) {
-  constexpr int KM = 1 + Dim, KS = sym_components<Dim> + Dim;
+  constexpr int KS = sym_components<Dim> + Dim;
   const ParticleFields<Dim, Body> fields{&p, &body};
-  auto mass_of = [&](std::size_t ip) { return fields.mass(ip); };
+  auto density_of = [&](std::size_t ip) { return fields.density(ip); };
+  auto velocity_of = [&](std::size_t ip) { return fields.velocity(ip); };
   auto stress_of = [&](std::size_t ip) { return fields.stress(ip); };
-  using MassSource = detail::ParticleRanges<Dim, KM, decltype(mass_of)>;
-  using StressSource = detail::ParticleRanges<Dim, KS, decltype(stress_of)>;
   std::size_t ncells = 1;
   for (int d = 0; d < Dim; ++d) ncells *= cells_[d];
   std::vector<MomentumTotals<Dim>> totals(ncells);
@@ -273,24 +284,42 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
       for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
       return;
     }
-    MassSource own{&p, order, mass_of};
-    StressSource own_s{&p, order, stress_of};
-    own.add(own_range);
-    own_s.add(own_range);
     // Completion with the particles of neighbouring cells (thesis §5.2.3) is not used: measured on the plate at
     // A = 0.1, it biases the slopes of compressed cells and made the 64-cell error 2.4x larger (docs/RESULTS.md);
     // a cell its own particles do not determine drops to a lower degree instead, conservative all the same.
-    const NoSamples<Dim, KM> no_neighbours;
-    const NoSamples<Dim, KS> no_neighbours_s;
-    // the cell's totals Σ m_p, Σ m_p v_p fix the first Taylor coefficient (thesis eq. 5.9)
-    Eigen::Matrix<double, KM, 1> integral = Eigen::Matrix<double, KM, 1>::Zero();
+    auto own = [&](auto values) {
+      detail::ParticleRanges<Dim, decltype(values(std::size_t{}))::RowsAtCompileTime, decltype(values)> src{
+          &p, order, values};
+      src.add(own_range);
+      return src;
+    };
+    const auto own_rho = own(density_of);
+    const auto own_v = own(velocity_of);
+    // The unconstrained fits (velocity, stress) have no integral to anchor them: with fewer than two samples per
+    // Taylor function their slopes amplify particle noise (measured: the plate with 2×2 particles per cell blows
+    // up at A = 0.1), and the constant instead under-integrates the force (1 stress per cell: the 64² plate at
+    // A = 0.05 drifts to an error of 24 % of the amplitude). Such cells fit the same degree to their own and the
+    // 8 neighbouring cells' particles (thesis §5.2.3, Fig. 5.7), counted as a neighbour fallback: with 2×2
+    // particles per cell the plate then converges (A = 0.1: u 1.7e-3 → 5.1e-4 from 32² to 64²; docs/RECONSTRUCTION.md).
+    const bool enough = own_range.second - own_range.first >= 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
+    auto fit_ls = [&](auto src) {
+      constexpr int K = decltype(src)::fields;
+      if (!enough) for_each_cell_near(c, 1, [&](std::size_t n) { if (n != c) src.add(cells.block_range(n)); });
+      auto fit = reconstruct_ls<Degree>(cell_box(c), src, NoSamples<Dim, K>{});
+      if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
+      counts[c].add(fit.status);
+      return fit;
+    };
+    // the cell's mass Σ m_p fixes the first Taylor coefficient of ρ (thesis eq. 5.9)
+    Eigen::Matrix<double, 1, 1> mass = Eigen::Matrix<double, 1, 1>::Zero();
+    Eigen::Matrix<double, Dim, 1> momentum = Eigen::Matrix<double, Dim, 1>::Zero();
     for (std::size_t k = own_range.first; k < own_range.second; ++k) {
       const std::size_t ip = order[k];
       double v[Dim];
-      integral[0] += p.m[ip];
+      mass[0] += p.m[ip];
       for (int d = 0; d < Dim; ++d) {
         v[d] = p.v[d][ip];
-        integral[1 + d] += p.m[ip] * v[d];
+        momentum[d] += p.m[ip] * v[d];
       }
       totals[c].add(p.m[ip], v);
     }
@@ -299,26 +328,31 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     std::vector<Vec<Dim>> points(per_cell_);
     for (int g = 0; g < per_cell_; ++g)
       for (int d = 0; d < Dim; ++d) points[g][d] = x_[d][first + g];
-    const auto fit = reconstruct_tls<Degree>(box, own, no_neighbours, integral);
-    counts[c].add(fit.status);
-    std::vector<Eigen::Matrix<double, KM, 1>> val(per_cell_);
-    detail::limited_values<Dim, KM>(fit, own, points, val);
+    const auto rho_fit = reconstruct_tls<Degree>(box, own_rho, NoSamples<Dim, 1>{}, mass);
+    counts[c].add(rho_fit.status);
+    std::vector<Eigen::Matrix<double, 1, 1>> rho(per_cell_);
+    detail::limited_values<Dim, 1>(rho_fit, own_rho, points, rho);
+    // Momentum as ρ̂ v̂, not a fit of ρv (beyond the thesis, which fits ρv, eq. 5.9): v̂ is bounded by the cell's
+    // particle velocities, so a nodal velocity Σφρ̂v̂ω / Σφρ̂ω is a weighted mean of bounded values even where the
+    // nodal mass is tiny. Fitting ρ and ρv apart let their ratio run away at such nodes (v ≈ 2e4 m/s on the
+    // 64² plate with 2×2 particles per cell). The mean of v̂ is shifted so that Σ_g ρ̂v̂ω = Σ m_p v_p exactly.
+    std::vector<Eigen::Matrix<double, Dim, 1>> vel(per_cell_);
+    detail::limited_values<Dim, Dim>(fit_ls(own_v), own_v, points, vel);
+    double m_g = 0.0;
+    Eigen::Matrix<double, Dim, 1> q_g = Eigen::Matrix<double, Dim, 1>::Zero();
     for (int g = 0; g < per_cell_; ++g) {
       const double w = local_w_[g] * volume;
-      m_[first + g] = w * val[g][0];
-      for (int d = 0; d < Dim; ++d) q_[d][first + g] = w * val[g][1 + d];
+      m_[first + g] = w * rho[g][0];
+      m_g += m_[first + g];
+      q_g += m_[first + g] * vel[g];
     }
+    const Eigen::Matrix<double, Dim, 1> shift = (momentum - q_g) / m_g;
+    for (int g = 0; g < per_cell_; ++g)
+      for (int d = 0; d < Dim; ++d) q_[d][first + g] = m_[first + g] * (vel[g][d] + shift[d]);
     if (!stress) return;
-    // The unconstrained stress fit has no integral to anchor it: with fewer than two samples per Taylor function
-    // its slopes amplify particle noise and, measured, destabilise the plate with 2×2 particles per cell at
-    // A = 0.1; such cells get the constant (mean) stress, counted as a degree fallback.
-    const bool enough = own.size() >= 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
-    const auto sfit = enough ? reconstruct_ls<Degree>(box, own_s, no_neighbours_s)
-                             : as_degree<Degree>(reconstruct_ls<0>(box, own_s, no_neighbours_s));
-    counts[c].add(sfit.status);
-    if (!enough && Degree > 0) ++counts[c].degree;
+    const auto own_s = own(stress_of);
     std::vector<Eigen::Matrix<double, KS, 1>> sval(per_cell_);
-    detail::limited_values<Dim, KS>(sfit, own_s, points, sval);
+    detail::limited_values<Dim, KS>(fit_ls(own_s), own_s, points, sval);
     for (int g = 0; g < per_cell_; ++g) {
       const double w = local_w_[g] * volume;
       for (int k = 0; k < sym_components<Dim>; ++k) s_[k][first + g] = w * sval[g][k];
@@ -360,21 +394,10 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_mls(const ParticleView<Dim>& p, co
     }
     detail::ParticleRanges<Dim, KM, decltype(mass_of)> src{&p, order, mass_of};
     detail::ParticleRanges<Dim, KS, decltype(stress_of)> src_s{&p, order, stress_of};
-    std::array<int, Dim> ci;
-    std::size_t rest = c;
-    for (int d = 0; d < Dim; ++d) {
-      ci[d] = static_cast<int>(rest % cells_[d]);
-      rest /= cells_[d];
-    }
-    const int span1 = Dim > 1 ? reach : 0;
-    for (int j = -span1; j <= span1; ++j)
-      for (int i = -reach; i <= reach; ++i) {
-        const int a = ci[0] + i, b = Dim > 1 ? ci[Dim - 1] + j : 0;
-        if (a < 0 || a >= cells_[0] || (Dim > 1 && (b < 0 || b >= cells_[Dim - 1]))) continue;
-        const std::size_t n = Dim > 1 ? a + static_cast<std::size_t>(cells_[0]) * b : a;
-        src.add(cells.block_range(n));
-        src_s.add(cells.block_range(n));
-      }
+    for_each_cell_near(c, reach, [&](std::size_t n) {
+      src.add(cells.block_range(n));
+      src_s.add(cells.block_range(n));
+    });
     const double volume = cell_box(c).volume();
     for (int g = 0; g < per_cell_; ++g) {
       Vec<Dim> xg;
