@@ -15,6 +15,7 @@
 #include <tbb/global_control.h>
 #include <tbb/info.h>
 
+#include "engine/energy_balance.hpp"
 #include "engine/output_h5.hpp"
 #include "engine/simulation.hpp"
 
@@ -27,6 +28,36 @@ using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 constexpr long backup_every = 64;  // steps between in-memory copies used to recover the last good state
+
+/// Steps between samples of the energy-balance guard: about 200 per run (as the metrics), at most backup_every,
+/// and a power of two so that every backup falls on a sample (the last good state is then a sample that passed).
+long guard_interval(long total_steps) {
+  long g = 1;
+  while (2 * g <= std::min(backup_every, std::max(1L, total_steps / 200))) g *= 2;
+  return g;
+}
+
+/// The per-step check of time.cfl: dt was fixed at the start from the initial state; it must stay below the
+/// critical step of the current one (same definition, Simulation::critical_step).
+template <int Dim>
+void check_cfl(const Simulation<Dim>& sim) {
+  const CriticalStep c = sim.critical_step();
+  if (sim.dt() <= c.dt) return;
+  const auto& s = sim.particles();
+  char buf[640];
+  int n = std::snprintf(buf, sizeof buf,
+                        "CFL violated at step %ld (t = %.6g s): dt = %.6g s exceeds the critical step h/(c + |v|) = "
+                        "%.6g s by a factor %.4g (h = %.4g m); particle %zu at x = (",
+                        sim.steps_done(), sim.time(), sim.dt(), c.dt, sim.dt() / c.dt, c.h, c.particle);
+  for (int d = 0; d < Dim && n < static_cast<int>(sizeof buf); ++d)
+    n += std::snprintf(buf + n, sizeof buf - n, "%s%.6g", d ? ", " : "", s.column(Field::position, d)[c.particle]);
+  if (n < static_cast<int>(sizeof buf))
+    std::snprintf(buf + n, sizeof buf - n,
+                  "): J = %.4g, wave speed c = %.6g m/s, |v| = %.6g m/s (time.cfl = %g of the initial critical step; "
+                  "the material stiffened or the particle sped up: lower time.cfl)",
+                  c.J, c.wave_speed, c.speed, *sim.scene().time.cfl);
+  throw UnstableRun(buf);
+}
 
 /// One-line progress on stderr, redrawn in place; only on a terminal, and only once a run has taken a while.
 class Progress {
@@ -88,21 +119,29 @@ std::vector<ColumnView> columns_of(const ParticleStore<Dim>& store) {
   return cols;
 }
 
-/// Where a run continues from: a state, the energy it started with and the worst drift so far.
+/// Where a run continues from: a state, the energy balance so far and the worst drift so far.
 struct StartPoint {
   SimulationState state;
-  double energy0 = 0.0, drift_max = 0.0;
+  EnergyBalance::State balance;
+  double drift_max = 0.0;
 };
 
 template <int Dim>
-void write_checkpoint(H5Writer& out, const Simulation<Dim>& sim, double energy0, double drift_max) {
+void write_checkpoint(H5Writer& out, const Simulation<Dim>& sim, const EnergyBalance& balance, double drift_max) {
   const SimulationState st = sim.save_state();
   std::vector<ColumnView> cols;
   for (std::size_t k = 0; k < st.names.size(); ++k) cols.push_back({st.names[k], st.columns[k]});
+  const EnergyBalance::State& b = balance.state();
   const std::pair<std::string, double> scalars[] = {{"mass_rel_max", st.conservation.mass_rel_max},
                                                     {"momentum_rel_max", st.conservation.momentum_rel_max},
-                                                    {"energy0", energy0},
-                                                    {"drift_rel_max", drift_max}};
+                                                    {"energy0", b.energy0},
+                                                    {"drift_rel_max", drift_max},
+                                                    {"external_work", b.work},
+                                                    {"external_power", b.power},
+                                                    {"energy_sample_time", b.time},
+                                                    {"energy_scale", b.scale},
+                                                    {"energy_excess_max", b.excess_max},
+                                                    {"energy_excess_min", b.excess_min}};
   out.write_checkpoint(st.step, st.time, cols, scalars);
 }
 
@@ -112,8 +151,11 @@ StartPoint read_checkpoint(const std::string& file) {
   sp.state.time = read_number_attribute(file, "/checkpoint", "time");
   sp.state.conservation = {read_number_attribute(file, "/checkpoint", "mass_rel_max"),
                            read_number_attribute(file, "/checkpoint", "momentum_rel_max")};
-  sp.energy0 = read_number_attribute(file, "/checkpoint", "energy0");
-  sp.drift_max = read_number_attribute(file, "/checkpoint", "drift_rel_max");
+  const auto scalar = [&](const char* name) { return read_number_attribute(file, "/checkpoint", name); };
+  sp.drift_max = scalar("drift_rel_max");
+  sp.balance = {scalar("energy0"),      scalar("external_work"),     scalar("external_power"),
+                scalar("energy_sample_time"), scalar("energy_scale"), scalar("energy_excess_max"),
+                scalar("energy_excess_min")};
   sp.state.names = list_datasets(file, "/checkpoint");
   for (const auto& name : sp.state.names) sp.state.columns.push_back(read_dataset(file, "/checkpoint/" + name));
   return sp;
@@ -135,21 +177,24 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
     for (const char* e : {"displacement_rms", "velocity_rms", "stress_rms"}) metric_names.push_back(e);
   if (out) out->set_metric_names(metric_names);
 
-  double energy0 = sim.energy().total(), drift_max = 0.0;
+  const double tolerance = scene.time.energy_tolerance;
+  EnergyBalance balance(tolerance, sim.energy().total(), sim.external_power(), sim.time());
+  double drift_max = 0.0;
   if (start) {
     sim.load_state(start->state);
-    energy0 = start->energy0;
+    balance = EnergyBalance(tolerance, start->balance);
     drift_max = start->drift_max;
     if (out) out->discard_after(sim.steps_done(), sim.time());
   }
+  const double energy0 = balance.state().energy0;
   const long total = sim.steps_total();
   const long metrics_every = std::max(1L, total / 200);
+  const long guard_every = guard_interval(total);
   const long snapshot_every = scene.output.every > 0 ? scene.output.every : total;
   const long checkpoint_every = scene.output.checkpoint_every;
   const bool check_cfl = scene.time.cfl.has_value();
 
-  auto record_metrics = [&] {
-    const Energy e = sim.energy();
+  auto record_metrics = [&](const Energy& e) {
     if (energy0 > 0) drift_max = std::max(drift_max, std::abs(e.total() - energy0) / energy0);
     if (!out) return;
     std::vector<double> row{static_cast<double>(sim.steps_done()), sim.time(), e.kinetic, e.strain, e.total(),
@@ -165,9 +210,11 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
   };
 
   if (!start) {
-    record_metrics();
+    record_metrics(sim.energy());
     snapshot();
   }
+  long last_balanced = sim.steps_done();  // the last step whose energy balance was checked and held
+  bool energy_failed = false;
   SimulationState backup = sim.save_state();
   Progress progress(!options.quiet);
   StopOnSignals signals;
@@ -181,20 +228,29 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
       stepping_s += seconds_since(t0);
       ++steps_timed;
       const long s = sim.steps_done();
-      if (check_cfl && sim.dt() > sim.critical_dt())
-        throw UnstableRun("CFL violated at step " + std::to_string(s) + " (t = " + std::to_string(sim.time()) +
-                          " s): dt = " + std::to_string(sim.dt()) + " s exceeds the current critical step " +
-                          std::to_string(sim.critical_dt()) + " s (material stiffened or particles sped up)");
-      if (s % metrics_every == 0 || sim.finished()) record_metrics();
+      if (check_cfl) mpm::check_cfl(sim);
+      const bool guard_now = s % guard_every == 0 || sim.finished();
+      const bool metrics_now = s % metrics_every == 0 || sim.finished();
+      if (guard_now || metrics_now) {
+        const Energy e = sim.energy();
+        if (guard_now) {
+          if (auto why = balance.sample(s, sim.time(), e.total(), sim.external_power())) {
+            energy_failed = true;
+            throw UnstableRun(*why);
+          }
+          last_balanced = s;
+        }
+        if (metrics_now) record_metrics(e);
+      }
       if (s % snapshot_every == 0 || sim.finished()) snapshot();
       if (out && checkpoint_every > 0 && s % checkpoint_every == 0 && !sim.finished())
-        write_checkpoint(*out, sim, energy0, drift_max);
+        write_checkpoint(*out, sim, balance, drift_max);
       progress.update(s, total, sim.time());
       if (const int sig = stop_signal.load(); sig != 0 && !sim.finished()) {
         result.status = exit_failure;
         result.message = "stopped by signal " + std::to_string(sig) + " at step " + std::to_string(s);
         if (out) {
-          write_checkpoint(*out, sim, energy0, drift_max);
+          write_checkpoint(*out, sim, balance, drift_max);
           result.message += "; checkpoint written to " + out->path() + " (continue with: mpm run --resume " +
                             out->path() + ")";
         }
@@ -204,14 +260,16 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
   } catch (const UnstableRun& e) {
     result.status = exit_unstable;
     result.message = e.what();
-    // replay from the last backup up to the step before the failure: the run is deterministic, so this is the
-    // last good state exactly; it is saved as a snapshot (and checkpoint) beside the earlier ones
-    const long last_good = sim.steps_done();  // a failed step is not counted
+    // replay from the last backup up to the last good step: the run is deterministic, so this is the last good
+    // state exactly; it is saved as a snapshot (and checkpoint) beside the earlier ones. A step that threw is not
+    // counted, so the last good state is the one before it; when the energy balance failed, it is the last sample
+    // that held (backups fall on samples, so it is never before the backup).
+    const long last_good = energy_failed ? std::max(last_balanced, backup.step) : sim.steps_done();
     sim.load_state(backup);
     while (sim.steps_done() < last_good) sim.step();
     snapshot();
     if (out) {
-      write_checkpoint(*out, sim, energy0, drift_max);
+      write_checkpoint(*out, sim, balance, drift_max);
       out->set_attribute("status", "unstable: " + result.message);
     }
     result.message += "; last good state (step " + std::to_string(sim.steps_done()) + ") saved";
@@ -236,7 +294,9 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
   }
   j["conservation"] = {{"mass_rel_max", sim.conservation().mass_rel_max},
                        {"momentum_rel_max", sim.conservation().momentum_rel_max}};
-  j["energy"] = {{"initial", energy0}, {"drift_rel_max", drift_max}};
+  const EnergyBalance::State& eb = balance.state();
+  j["energy"] = {{"initial", energy0},          {"drift_rel_max", drift_max},     {"external_work", eb.work},
+                 {"balance_gain_max", eb.excess_max}, {"balance_loss_max", -eb.excess_min}, {"tolerance", tolerance}};
   const FallbackCounts fb = sim.fallbacks();
   j["fallbacks"] = {{"neighbour", fb.neighbour}, {"degree", fb.degree}, {"constant", fb.constant}, {"empty", fb.empty}};
   j["pipeline"] = sim.pipeline();

@@ -137,7 +137,7 @@ const std::vector<std::pair<std::string, Keys>>& sections() {
       {"particles", {"per_cell", "layout", "seed"}},
       {"material", {"model", "E", "nu", "density"}},
       {"algorithm", {"update", "mass", "mapping", "gauss_per_cell", "mls_support", "tls_degree"}},
-      {"time", {"dt", "cfl", "end"}},
+      {"time", {"dt", "cfl", "end", "energy_tolerance"}},
       {"output", {"file", "every", "checkpoint_every"}},
   };
   return s;
@@ -421,6 +421,7 @@ json source_of(const Scene& s, const ProblemInfo* info) {
   j["time"] = {{"end", s.time.end}};
   if (s.time.dt) j["time"]["dt"] = *s.time.dt;
   if (s.time.cfl) j["time"]["cfl"] = *s.time.cfl;
+  j["time"]["energy_tolerance"] = s.time.energy_tolerance;
   j["output"] = {{"file", s.output.file}, {"every", s.output.every}, {"checkpoint_every", s.output.checkpoint_every}};
   if (!s.bodies.empty()) {
     json bodies = json::array();
@@ -513,6 +514,9 @@ void read_time(const Node& top, Scene& s, const ProblemInfo* info) {
   else
     s.time.dt = info->dt;
   s.time.end = number(time, "end", info ? std::optional<double>(info->end) : std::nullopt, positive, "a positive number (s)");
+  s.time.energy_tolerance = number(time, "energy_tolerance", s.time.energy_tolerance, positive,
+                                   "a positive number (allowed energy gain beyond the external work, as a fraction "
+                                   "of the largest energy; default 0.15)");
   if (s.time.dt) {
     if (s.time.end < *s.time.dt) fail("time.end", s.time.end, "expected end ≥ time.dt = " + num(*s.time.dt));
     if (s.time.end / *s.time.dt > 1e9)

@@ -228,9 +228,6 @@ Simulation<Dim>::Simulation(const Scene& scene)
       }()) {
   if (scene.dimension != Dim) throw std::logic_error("Simulation: scene dimension does not match");
 
-  // time step: given, or a fraction of the critical step h_min / c of the stiffest body
-  double h_min = 1e300, c_max = 0.0;
-  for (int d = 0; d < Dim; ++d) h_min = std::min(h_min, scene.grid.length[d] / scene.grid.cells[d]);
   const auto bodies = problem_->bodies();
   for (std::size_t b = 0; b < bodies.size(); ++b) {
     const MaterialSpec& m = bodies[b].material;
@@ -238,21 +235,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
     if (m.model != scene.material.model || m.E != scene.material.E || m.nu != scene.material.nu)
       throw SceneError("scene: bodies." + std::to_string(b) +
                        ".material: expected the scene's model, E and nu (bodies may differ in density only)");
-    c_max = std::max(c_max, wave_speed(m));
   }
-  const double dt_critical = h_min / c_max;
-  if (scene.time.cfl) {
-    dt_ = *scene.time.cfl * dt_critical;
-  } else {
-    dt_ = *scene.time.dt;
-    if (dt_ > dt_critical) {
-      std::ostringstream msg;
-      msg << "scene: time.dt = " << dt_ << ": expected at most the critical step h/c = " << dt_critical
-          << " s (cell size " << h_min << " m, wave speed " << c_max << " m/s)";
-      throw SceneError(msg.str());
-    }
-  }
-  steps_total_ = count_steps<Dim>(scene, dt_);
 
   const Seeds<Dim> seeds = seed_particles(scene, *problem_);
   const std::size_t n = seeds.x.size();
@@ -270,6 +253,24 @@ Simulation<Dim>::Simulation(const Scene& scene)
     store_.column(Field::volume0)[p] = seeds.V0[p];
   }
   particle_mass_ = deterministic_sum(n, [&](std::size_t p) { return seeds.m[p]; });
+
+  // time step: given, or a fraction of the critical step of the initial state (the same definition the per-step
+  // check of time.cfl uses, so a run at cfl < 1 does not fail its first check by construction)
+  const CriticalStep critical = critical_step();
+  if (scene.time.cfl) {
+    dt_ = *scene.time.cfl * critical.dt;
+  } else {
+    dt_ = *scene.time.dt;
+    if (dt_ > critical.dt) {
+      std::ostringstream msg;
+      msg << "scene: time.dt = " << dt_ << ": expected at most the critical step h/(c + |v|) = " << critical.dt
+          << " s of the initial state (cell size " << critical.h << " m; particle " << critical.particle
+          << ": wave speed " << critical.wave_speed << " m/s, |v| = " << critical.speed
+          << " m/s); use a smaller time.dt or time.cfl";
+      throw SceneError(msg.str());
+    }
+  }
+  steps_total_ = count_steps<Dim>(scene, dt_);
   empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
 
   // DOF = i0 + stride1 · i1, with ghost columns for the kernels' padding lanes (stencil.hpp); they stay empty
@@ -366,10 +367,7 @@ void Simulation<Dim>::step() {
     store_.permute(bins_.order());
     bins_.adopt_order();
   }
-  std::array<const double*, Dim> X{};
-  if (store_.has(Field::reference))
-    for (int d = 0; d < Dim; ++d) X[d] = store_.column(Field::reference, d).data();
-  const BodyForce<Dim> body = problem_->body_force(time_, X);
+  const BodyForce<Dim> body = problem_->body_force(time_, reference_columns());
   std::visit([&](const auto& basis, const auto& material,
                  const auto& force) { step_with(basis, material, force, dt); },
              basis_, material_, body);
@@ -672,30 +670,76 @@ RunErrors Simulation<Dim>::errors() const {
 }
 
 template <int Dim>
-double Simulation<Dim>::critical_dt() const {
+CriticalStep Simulation<Dim>::critical_step() const {
   const auto& s = store_;
   const auto m = s.column(Field::mass);
   const auto V0 = s.column(Field::volume0);
-  double h_min = 1e300;
-  for (int d = 0; d < Dim; ++d) h_min = std::min(h_min, scene_.grid.length[d] / scene_.grid.cells[d]);
-  const double speed = std::visit(
+  CriticalStep out;
+  out.h = 1e300;
+  for (int d = 0; d < Dim; ++d) out.h = std::min(out.h, scene_.grid.length[d] / scene_.grid.cells[d]);
+  // the fastest signal c(J) + |v| over particles; ties go to the lowest index, so the result (and the particle a
+  // message names) does not depend on the thread count
+  struct Fastest {
+    double signal = -1.0;
+    std::size_t p = 0;
+  };
+  const auto faster = [](const Fastest& a, const Fastest& b) {
+    return b.signal > a.signal || (b.signal == a.signal && b.p < a.p) ? b : a;
+  };
+  const auto signal_of = [&](const auto& mat, std::size_t p, double& c, double& v, double& J) {
+    double F[Dim * Dim], v2 = 0;
+    for (int k = 0; k < Dim * Dim; ++k) F[k] = s.column(Field::deformation, k)[p];
+    for (int d = 0; d < Dim; ++d) v2 += std::pow(s.column(Field::velocity, d)[p], 2);
+    J = Dim == 1 ? F[0] : F[0] * F[3] - F[1] * F[2];
+    c = mat.wave_speed(J, m[p] / V0[p]);
+    v = std::sqrt(v2);
+    return c + v;
+  };
+  std::visit(
       [&](const auto& mat) {
-        return tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, s.size(), 4096), 0.0,
-            [&](const tbb::blocked_range<std::size_t>& r, double acc) {
-              for (std::size_t p = r.begin(); p < r.end(); ++p) {
-                double F[Dim * Dim], v2 = 0;
-                for (int c = 0; c < Dim * Dim; ++c) F[c] = s.column(Field::deformation, c)[p];
-                for (int d = 0; d < Dim; ++d) v2 += std::pow(s.column(Field::velocity, d)[p], 2);
-                const double J = Dim == 1 ? F[0] : F[0] * F[3] - F[1] * F[2];
-                acc = std::max(acc, mat.wave_speed(J, m[p] / V0[p]) + std::sqrt(v2));
-              }
+        const Fastest f = tbb::parallel_reduce(
+            tbb::blocked_range<std::size_t>(0, s.size(), 4096), Fastest{},
+            [&](const tbb::blocked_range<std::size_t>& r, Fastest acc) {
+              double c, v, J;
+              for (std::size_t p = r.begin(); p < r.end(); ++p) acc = faster(acc, {signal_of(mat, p, c, v, J), p});
               return acc;
             },
-            [](double a, double b) { return std::max(a, b); });
+            faster);
+        out.particle = f.p;
+        signal_of(mat, f.p, out.wave_speed, out.speed, out.J);
       },
       material_);
-  return h_min / speed;
+  out.dt = out.h / (out.wave_speed + out.speed);
+  return out;
+}
+
+template <int Dim>
+std::array<const double*, Dim> Simulation<Dim>::reference_columns() const {
+  std::array<const double*, Dim> X{};
+  if (store_.has(Field::reference))
+    for (int d = 0; d < Dim; ++d) X[d] = store_.column(Field::reference, d).data();
+  return X;
+}
+
+template <int Dim>
+double Simulation<Dim>::external_power() const {
+  if (!problem_->has_body_force()) return 0.0;
+  const auto& s = store_;
+  const auto m = s.column(Field::mass);
+  return std::visit(
+      [&](const auto& force) {
+        if constexpr (!std::decay_t<decltype(force)>::active) {
+          return 0.0;
+        } else {
+          return deterministic_sum(s.size(), [&](std::size_t p) {
+            const std::array<double, Dim> b = force.template at<Dim>(p);
+            double bv = 0.0;
+            for (int d = 0; d < Dim; ++d) bv += b[d] * s.column(Field::velocity, d)[p];
+            return m[p] * bv;
+          });
+        }
+      },
+      problem_->body_force(time_, reference_columns()));
 }
 
 template <int Dim>

@@ -43,6 +43,17 @@ struct Energy {
   double total() const { return kinetic + strain; }
 };
 
+/// The explicit stability limit of a state, dt_crit = h_min / max_p (c(J_p) + |v_p|), and the particle that sets
+/// it. One definition for the step chosen from `time.cfl`, the start-up check of `time.dt` and the per-step check.
+struct CriticalStep {
+  double dt = 0.0;          ///< s
+  double h = 0.0;           ///< smallest cell size, m
+  std::size_t particle = 0;
+  double wave_speed = 0.0;  ///< tangent P-wave speed c(J) at that particle, m/s
+  double speed = 0.0;       ///< |v| of that particle, m/s
+  double J = 1.0;
+};
+
 /// Every basis the engine can run, resolved once per step.
 template <int Dim>
 using AnyBasis = std::variant<TensorBasis<Dim, UniformAxis<2>>, TensorBasis<Dim, UniformAxis<3>>,
@@ -101,7 +112,9 @@ class Simulation {
   Energy energy() const;
   /// The largest stable time step for the current state: h_min / max_p (c(J_p) + |v_p|), with c the tangent
   /// P-wave speed of the material at the particle's J (neo-Hookean stiffens under compression).
-  double critical_dt() const;
+  CriticalStep critical_step() const;
+  /// Power of the external (body) forces on the particles now, Σ_p m_p b_p(t)·v_p, W; 0 without a body force.
+  double external_power() const;
   /// Reconstruction fallbacks so far (all zero for direct mapping).
   FallbackCounts fallbacks() const { return gauss_ ? gauss_->fallbacks() : FallbackCounts{}; }
   /// CG iterations of the consistent-mass solves in the last step (0 for lumped mass).
@@ -122,6 +135,7 @@ class Simulation {
   void check_momentum(const MomentumTotals<Dim>& particles);
   void apply_fixed(std::array<std::vector<double>, Dim>& field);
   void raise_unstable(std::size_t particle, const char* stage) const;
+  std::array<const double*, Dim> reference_columns() const;
 
   Scene scene_;
   std::unique_ptr<Problem<Dim>> problem_;

@@ -73,6 +73,9 @@ TEST_CASE("malformed scenes are refused with a message naming the key", "[scene]
       {"too many steps", &plate, "/time/dt", 1e-12, "time.dt"},
       {"end before dt", &bodies, "/time/end", 1e-5, "time.end"},
       {"no dt or cfl without a problem", &bodies, "/time/dt", erase, "time.dt"},
+      {"negative energy tolerance", &plate, "/time/energy_tolerance", -0.1, "time.energy_tolerance"},
+      {"zero energy tolerance", &plate, "/time/energy_tolerance", 0, "time.energy_tolerance"},
+      {"energy tolerance as a string", &plate, "/time/energy_tolerance", "0.1", "time.energy_tolerance"},
       {"missing grid.cells", &plate, "/grid/cells", erase, "grid.cells"},
       {"missing grid.length", &plate, "/grid/length", erase, "grid.length"},
       {"zero cells", &plate, "/grid/cells", json::array({0, 8}), "grid.cells"},
@@ -207,6 +210,7 @@ TEST_CASE("a plate scene gets the problem's defaults", "[scene]") {
   CHECK(*s.time.dt == 1e-5);
   CHECK_FALSE(s.time.cfl);
   CHECK(s.time.end == 0.2);
+  CHECK(s.time.energy_tolerance == 0.15);
   CHECK(s.output.file.empty());
   CHECK(s.output.every == 0);
   CHECK(s.fixed_sides == std::vector<int>{0, 1, 2, 3});

@@ -116,6 +116,7 @@ class Case:
     drift_warn: float | None = None   # a completed run whose energy drift exceeds this is flagged (default: 0.1
                                       # when conserves_energy)
     u_warn: float | None = None       # ... or whose RMS displacement error exceeds this (the plate: its amplitude A)
+    u_warn_why: str = "u error > A"   # the flag's words (e.g. the known cause)
 
     def __post_init__(self):
         if self.drift_warn is None and self.conserves_energy:
@@ -169,12 +170,16 @@ def build_families() -> list[Family]:
                "compression a nearly incompressible neo-Hookean material stiffens fast, so the step fixed at the "
                "start from cfl 0.5 can fall behind the current critical step (the engine then stops with “CFL "
                "violated”); cfl 0.25 leaves room for it. ν = 0.3 is the reference row. Exact solution and body "
-               "force follow ν (PROBLEMS.md).")
+               "force follow ν (PROBLEMS.md). At ν = 0.499 the runs that complete are stable but inaccurate: "
+               "volumetric locking of the fully integrated basis (no B-bar / F-bar), flagged “u error > A: "
+               "locking” — the energy balance holds (gain 0: the energy only falls behind the body force's work), "
+               "J stays above 0.3, and the error barely falls with the cell size (BSMPM USL, cfl 0.25: RMS u error "
+               "0.129 at 16×16 and 0.113 at 32×32 cells, against 0.029 → 0.022 at ν = 0.49 and 0.0026 at ν = 0.3).")
     for cfl in [0.5, 0.25]:
         for nu in [0.3, 0.45, 0.49, 0.499]:
             f.cases.append(Case(f.key, f"ν = {nu}, cfl {cfl}", "plate.json",
                                 [f"material.nu={nu}", "time.dt=null", f"time.cfl={cfl}", "time.end=0.0075"],
-                                u_warn=0.05))
+                                u_warn=0.05, u_warn_why="u error > A: locking" if nu >= 0.499 else "u error > A"))
     fams.append(f)
 
     # -- large deformation: plate amplitude
@@ -236,14 +241,16 @@ def build_families() -> list[Family]:
     # -- time step near the critical one
     bar = load_scene("bar-critical.json")
     f = Family("critical", "Time step near, at and just above the critical one",
-               "The engine's critical step at start is h/c (cell size over the P-wave speed of the undeformed "
-               "material). `bar-critical.json` (20 cells, 4 per cell, T = 0.1 s) and the plate (`plate.json`, 16×16, "
-               "T = 0.0225 s). A `time.dt` above h/c must be refused at start (exit 2) and `time.cfl` above 1 is "
-               "refused by the parser (exit 2): both are marked “refused (exit 2)”, the correct outcome. With "
-               "`time.cfl` the engine also checks every step that dt stays below the current critical step "
-               "h / max(c(J) + |v|) and stops the run (exit 3, “CFL violated”) when it does not; a `time.dt` given "
-               "explicitly is not watched that way, so the dt = 0.9 and 0.99 h/c rows show whether the scheme itself "
-               "stays stable just below the start-up limit.")
+               "The engine's critical step is h / max_p (c(J_p) + |v_p|) (cell size over the fastest signal: "
+               "the tangent P-wave speed at the particle's J plus its speed), one definition for the start and "
+               "every step. The rows give dt in units of h/c of the undeformed material at rest. "
+               "`bar-critical.json` (20 cells, 4 per cell, T = 0.1 s) and the plate (`plate.json`, 16×16, "
+               "T = 0.0225 s). A `time.dt` above the critical step of the initial state must be refused at start "
+               "(exit 2) and `time.cfl` above 1 is refused by the parser (exit 2): both are marked “refused (exit "
+               "2)”, the correct outcome. With `time.cfl` the engine also checks every step that dt stays below the "
+               "current critical step and stops the run (exit 3, “CFL violated”) when it does not; a `time.dt` "
+               "given explicitly is not watched that way, so the dt = 0.9 and 0.99 h/c rows show whether the "
+               "scheme itself stays stable just below the start-up limit.")
     for label, scene_name, base, cfls in [("bar", "bar-critical.json", bar, [0.9, 1.0]),
                                           ("plate", "plate.json", plate, [0.8, 0.9, 1.0])]:
         dtc = critical_dt(base)
@@ -253,8 +260,11 @@ def build_families() -> list[Family]:
             f.cases.append(Case(f.key, f"{label}: cfl = {c}", scene_name, ["time.dt=null", f"time.cfl={c}"],
                                 conserves_energy=cons, u_warn=uw))
         for k in [0.9, 0.99]:
+            # the plate starts moving (|v| ≈ 0.19 c): its critical step h/(c + |v|) is 0.84 h/c, so a time.dt of
+            # 0.9 h/c is above it and must be refused; the bar starts with |v| ≪ c
             f.cases.append(Case(f.key, f"{label}: dt = {k} h/c = {fmt(k * dtc)} s", scene_name,
-                                ["time.cfl=null", f"time.dt={k * dtc:.6g}"], conserves_energy=cons, u_warn=uw))
+                                ["time.cfl=null", f"time.dt={k * dtc:.6g}"], conserves_energy=cons, u_warn=uw,
+                                expect_refusal=label == "plate"))
         f.cases += [
             Case(f.key, f"{label}: dt = 1.01 h/c = {fmt(1.01 * dtc)} s", scene_name,
                  ["time.cfl=null", f"time.dt={1.01 * dtc:.6g}"], expect_refusal=True),
@@ -285,9 +295,9 @@ class Run:
         return f"{self.method} {self.scheme.upper()}"
 
 
-def command(mpm: str, case: Case, method_sets: list[str], scheme: str, summary: str) -> list[str]:
+def command(mpm: str, case: Case, method_sets: list[str], scheme: str, summary: str, extra: list[str]) -> list[str]:
     argv = [mpm, "run", os.path.join(SCENES, case.scene)]
-    for s in method_sets + [f"algorithm.update={scheme}"] + case.sets:
+    for s in method_sets + [f"algorithm.update={scheme}"] + case.sets + extra:
         argv += ["--set", s]
     return argv + ["--threads", "1", "--quiet", "--summary", summary]
 
@@ -353,13 +363,12 @@ def failure(run: Run) -> tuple[str, str]:
     m = re.sub(r";\s*last good state.*$", "", run.message)
     step = re.search(r"at step (\d+)", m)
     step_s = step.group(1) if step else str(run.summary.get("steps", "?"))
-    cfl = re.search(r"dt = ([\d.e+-]+) s exceeds the current critical step ([\d.e+-]+)", m)
     if m.startswith("CFL violated"):
-        why = "CFL violated"
-        # the engine prints both steps with 6 decimals: a ratio only where that leaves 3 significant digits
-        if cfl and len(cfl.group(2).replace(".", "").lstrip("0")) >= 3:
-            why += f" (dt = {float(cfl.group(1)) / float(cfl.group(2)):.3g} × current critical)"
-        return step_s, why
+        factor = re.search(r"by a factor ([\d.e+-]+)", m)
+        return step_s, "CFL violated" + (f" (dt = {float(factor.group(1)):.3g} × current critical)" if factor else "")
+    if m.startswith("energy balance violated"):
+        gain = re.search(r"= ([\d.e+-]+) x scale", m)
+        return step_s, "energy balance" + (f" (gain {float(gain.group(1)):.2g} × max E)" if gain else "")
     tail = re.search(r":\s*([^:]+)$", m)
     why = tail.group(1).strip() if tail else m
     stage = re.search(r"\),\s*([\w\-+ ]+):\s*particle", m)
@@ -378,11 +387,17 @@ def silent_blowup(run: Run) -> str:
     if run.outcome != "ok":
         return ""
     drift = run.summary.get("energy", {}).get("drift_rel_max")
+    gain = run.summary.get("energy", {}).get("balance_gain_max")
     u = run.summary.get("errors", {}).get("displacement_rms")
-    if run.case.drift_warn is not None and drift is not None and drift > run.case.drift_warn:
+    # without external work only a gain is a blow-up (a loss is the scheme's dissipation): the balance's gain;
+    # with gravity the drift, which includes the work of gravity, against a generous bound (a cross-check that
+    # does not rely on the engine's own bookkeeping)
+    if run.case.conserves_energy and gain is not None and gain > run.case.drift_warn:
+        return "energy grew"
+    if not run.case.conserves_energy and run.case.drift_warn is not None and drift is not None and drift > run.case.drift_warn:
         return "energy grew"
     if run.case.u_warn is not None and u is not None and u > run.case.u_warn:
-        return "u error > A"
+        return run.case.u_warn_why
     return ""
 
 
@@ -390,7 +405,7 @@ def cell(run: Run) -> str:
     s = run.summary
     if run.outcome == "ok":
         drift = s.get("energy", {}).get("drift_rel_max")
-        parts = [f"drift {sci(drift)}"]
+        parts = [f"drift {sci(drift)}", f"gain {sci(s.get('energy', {}).get('balance_gain_max'))}"]
         if "errors" in s:
             parts.append(f"u err {sci(s['errors'].get('displacement_rms'))}")
         falls = sum(s.get("fallbacks", {}).values()) if s.get("fallbacks") else 0
@@ -431,6 +446,7 @@ def details_row(run: Run) -> str:
     return "| " + " | ".join([
         run.case.name, run.column, {"na": "n/a"}.get(run.outcome, run.outcome) + (" ✗" if expectation_broken(run) else ""),
         str(s.get("steps", "")), step, shorten(msg, 90), sci(s.get("energy", {}).get("drift_rel_max")),
+        sci(s.get("energy", {}).get("balance_gain_max")), sci(s.get("energy", {}).get("balance_loss_max")),
         sci(cons.get("mass_rel_max")), sci(cons.get("momentum_rel_max")), fb,
         sci(errs.get("displacement_rms")), f"{s['wall_s']:.2f}" if "wall_s" in s else "", f"{run.elapsed:.1f}",
     ]) + " |"
@@ -438,31 +454,35 @@ def details_row(run: Run) -> str:
 
 def survival(runs: list[Run], columns: list[str]) -> list[str]:
     lines = ["| method | ran | ok | ok ⚠ (blew up or meaningless) | blew up (J ≤ 0, non-finite, left grid) | stopped by the CFL "
-             "check | other | refused as expected | cases not completed cleanly |", "|---|---|---|---|---|---|---|---|---|"]
+             "check | stopped by the energy guard | other | refused as expected | cases not completed cleanly |",
+             "|---|---|---|---|---|---|---|---|---|---|"]
     for col in columns:
         mine = [r for r in runs if r.column == col]
         ran = [r for r in mine if r.outcome != "na" and not r.case.expect_refusal]
         warn = [r for r in ran if silent_blowup(r)]
         ok = [r for r in ran if r.outcome == "ok" and r not in warn]
         cfl = [r for r in ran if r.outcome == "unstable" and r.message.startswith("CFL violated")]
-        bad = [r for r in ran if r.outcome == "unstable" and r not in cfl]
+        energy = [r for r in ran if r.outcome == "unstable" and r.message.startswith("energy balance")]
+        bad = [r for r in ran if r.outcome == "unstable" and r not in cfl and r not in energy]
         other = [r for r in ran if r.outcome not in ("ok", "unstable")]
         refused = [r for r in mine if r.case.expect_refusal and r.outcome == "refused"]
         exp = [r for r in mine if r.case.expect_refusal and r.outcome != "na"]
         if not ran:
             note = f" (refused as expected: {len(refused)}/{len(exp)})" if exp else ""
-            lines.append(f"| {col} | not available{note} | | | | | | | |")
+            lines.append(f"| {col} | not available{note} | | | | | | | | |")
             continue
         def tag(r: Run) -> str:
             if r in warn:
                 return "⚠ " + silent_blowup(r)
             if r in cfl:
                 return "CFL"
+            if r in energy:
+                return "energy"
             if r.outcome == "unstable":
                 return failure(r)[1].split(" in ")[0].replace("<=", "≤")
             return r.outcome
-        names = "; ".join(f"{r.case.name} ({tag(r)})" for r in bad + warn + cfl + other) or "—"
-        lines.append(f"| {col} | {len(ran)} | {len(ok)} | {len(warn)} | {len(bad)} | {len(cfl)} | {len(other)} | "
+        names = "; ".join(f"{r.case.name} ({tag(r)})" for r in bad + warn + cfl + energy + other) or "—"
+        lines.append(f"| {col} | {len(ran)} | {len(ok)} | {len(warn)} | {len(bad)} | {len(cfl)} | {len(energy)} | {len(other)} | "
                      f"{len(refused)}/{len(exp)} | {names} |")
     return lines
 
@@ -487,12 +507,14 @@ def render(fams: list[Family], runs: list[Run], argv: list[str], mpm: str, total
         "and `musl`; lumped mass. Each run is `mpm run tools/scenes/stability/SCENE --set <method> "
         "--set algorithm.update=<scheme> --set <case> --threads 1 --summary S.json` (`--list` prints every command).",
         "",
-        "Cells: `ok (drift D, u err U)` — completed; D = max |E(t) − E(0)| / E(0) of kinetic + strain energy "
-        "(sampled 200 times per run; it includes the work of body forces and gravity where there are any), U = RMS "
+        "Cells: `ok (drift D, gain G, u err U)` — completed; D = max |E(t) − E(0)| / E(0) of kinetic + strain energy "
+        "(sampled 200 times per run; it includes the work of body forces and gravity where there are any); G = the "
+        "largest energy gain the external work does not explain, max (E(t) − E(0) − W_ext(t)) / max(E(0), max E), "
+        "which the engine's energy guard stops at `time.energy_tolerance` (0.15; “exit 3 … energy balance”); U = RMS "
         "displacement error against the exact solution at the end (where there is one); "
-        f"`ok ⚠ energy grew` — completed, but the energy of a case without external work changed by more than "
-        f"{DRIFT_WARN:.0%} (for the falling blocks: by more than {GRAVITY_DRIFT_WARN:.0f} E(0)), a blow-up the engine "
-        "did not stop; `ok ⚠ u error > A` — completed, but the plate's RMS displacement error exceeds its amplitude: "
+        f"`ok ⚠ energy grew` — completed, but the energy of a case without external work grew by more than "
+        f"{DRIFT_WARN:.0%} of its largest value (G > {DRIFT_WARN}; for the falling blocks: a drift above "
+        f"{GRAVITY_DRIFT_WARN:.0f} E(0)), a blow-up the engine did not stop; `ok ⚠ u error > A` — completed, but the plate's RMS displacement error exceeds its amplitude: "
         "the result is meaningless; `exit 3 @ step N: why` — the engine stopped the run as unstable (exit 3) at step N; "
         "`refused (exit 2)` — refused at start, the expected outcome of a time step above the critical one; "
         "`n/a` — the engine refuses the method or problem as not available yet (exit 2); `exit 2: …` — an "
@@ -519,9 +541,9 @@ def render(fams: list[Family], runs: list[Run], argv: list[str], mpm: str, total
     out += ["", "## Conclusions", "", "<!-- conclusions:begin -->", conclusions.strip() or
             "_(write the conclusions from the tables above)_", "<!-- conclusions:end -->", ""]
     out += ["## Details of every run", "", "<details><summary>one row per run</summary>", "",
-            "| case | method | outcome | steps | failed at | reason | drift | mass err | momentum err | "
+            "| case | method | outcome | steps | failed at | reason | drift | gain | loss | mass err | momentum err | "
             "fallbacks | u RMS | stepping s | process s |",
-            "|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
+            "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"]
     order = {(f.key, c.name): i for i, (f, c) in enumerate((f, c) for f in fams for c in f.cases)}
     for r in sorted(runs, key=lambda r: (order.get((r.case.family, r.case.name), 0), columns.index(r.column))):
         out.append(details_row(r))
@@ -550,6 +572,9 @@ def main() -> int:
     ap.add_argument("--out", default=os.path.join("docs", "STABILITY.md"), help="the page to write (default: %(default)s)")
     ap.add_argument("--raw", help="also write every run's summary and message as JSON to this file")
     ap.add_argument("--list", action="store_true", help="print the runs and exit")
+    ap.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
+                    help="one more override for every run, e.g. time.energy_tolerance=1e9 to measure the energy "
+                    "balance with the guard off (repeatable; the page's header records it)")
     args = ap.parse_args()
 
     mpm = args.mpm if os.path.isabs(args.mpm) else os.path.join(ROOT, args.mpm)
@@ -567,9 +592,9 @@ def main() -> int:
             for method, msets in METHODS:
                 for scheme in SCHEMES:
                     summary = os.path.join(tmp, f"run{len(runs)}.json")
-                    sets = msets + [f"algorithm.update={scheme}"] + case.sets
+                    sets = msets + [f"algorithm.update={scheme}"] + case.sets + args.set
                     key = json.dumps(apply_sets(load_scene(case.scene), sets), sort_keys=True)
-                    runs.append(Run(case, method, scheme, command(mpm, case, msets, scheme, summary), key))
+                    runs.append(Run(case, method, scheme, command(mpm, case, msets, scheme, summary, args.set), key))
     if args.list:
         for r in runs:
             print(f"[{r.case.family}] {r.case.name} | {r.column}:\n  " +
