@@ -295,13 +295,14 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     };
     const auto own_rho = own(density_of);
     const auto own_v = own(velocity_of);
-    // The unconstrained fits (velocity, stress) have no integral to anchor them: with fewer than two samples per
-    // Taylor function their slopes amplify particle noise (measured: the plate with 2×2 particles per cell blows
-    // up at A = 0.1), and the constant instead under-integrates the force (1 stress per cell: the 64² plate at
-    // A = 0.05 drifts to an error of 24 % of the amplitude). Such cells fit the same degree to their own and the
-    // 8 neighbouring cells' particles (thesis §5.2.3, Fig. 5.7), counted as a neighbour fallback: with 2×2
-    // particles per cell the plate then converges (A = 0.1: u 1.7e-3 → 5.1e-4 from 32² to 64²; docs/RECONSTRUCTION.md).
-    const bool enough = own_range.second - own_range.first >= 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
+    // The unconstrained fits (velocity, stress) have no integral to anchor them: with fewer than three samples
+    // per Taylor function their slopes amplify particle noise (measured at A = 0.1: the plate blows up with 2×2
+    // particles per cell and a linear fit through 4 particles, and with 3×2 and a fit through 6), and the constant
+    // instead under-integrates the force (1 stress per cell: the 64² plate at A = 0.05 drifts to an error of 24 %
+    // of the amplitude). Such cells fit the same degree to their own and the 8 neighbouring cells' particles
+    // (thesis §5.2.3, Fig. 5.7), counted as a neighbour fallback: with 2×2 particles per cell the plate then
+    // converges (A = 0.1: u 1.7e-3 → 5.1e-4 from 32² to 64²; docs/RECONSTRUCTION.md).
+    const bool enough = own_range.second - own_range.first >= 3 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
     auto fit_ls = [&](auto src) {
       constexpr int K = decltype(src)::fields;
       if (!enough) for_each_cell_near(c, 1, [&](std::size_t n) { if (n != c) src.add(cells.block_range(n)); });

@@ -33,7 +33,7 @@ RunResult run(const nlohmann::json& scene) {
 
 }  // namespace
 
-TEST_CASE("the critical step counts the particle speed, at the start as in every step", "[cfl][guards]") {
+TEST_CASE("the critical step counts the particle speed at the start as in every step", "[cfl][guards]") {
   const Simulation<2> sim(parse_scene(moving_block(5.0)));
   const CriticalStep c = sim.critical_step();
   const double h = 0.05, c0 = std::sqrt(1e5 * 0.7 / (1.3 * 0.4 * 1000.0));
@@ -53,7 +53,7 @@ TEST_CASE("time.cfl = 0.95 runs a fast free block to the end: the per-step check
   CHECK(r.status == exit_ok);
 }
 
-TEST_CASE("a block compressed against a wall stops with a CFL message naming dt, ratio, particle and wave speed",
+TEST_CASE("a block compressed against a wall stops with a CFL message naming dt and ratio and particle and wave speed",
           "[cfl][guards]") {
   // at 6 m/s into the fixed side x+ the block is compressed, J drops and the neo-Hookean wave speed c(J) rises
   // above what the step chosen at cfl 0.95 allows
@@ -68,7 +68,7 @@ TEST_CASE("a block compressed against a wall stops with a CFL message naming dt,
                             Contains("|v| =") && Contains("last good state"));
 }
 
-TEST_CASE("a time.dt above the critical step of the initial state is refused, naming particle and speeds",
+TEST_CASE("a time.dt above the critical step of the initial state is refused naming particle and speeds",
           "[cfl][guards]") {
   auto scene = moving_block(5.0);
   const double h = 0.05, c0 = std::sqrt(1e5 * 0.7 / (1.3 * 0.4 * 1000.0));

@@ -96,7 +96,7 @@ TEST_CASE("cubic spline - natural reproduces linear functions - not cubics - and
   for (double x : {0.0, 2.0}) CHECK(std::abs((c(x + d) - 2.0 * c(x) + c(x - d))[0]) / (d * d) < 1e-2);
 }
 
-TEST_CASE("cubic spline - order 4 on f = sin(x) + 2 over [0 4pi] (thesis Fig 3.3 function)", "[cubic-spline][kernel]") {
+TEST_CASE("cubic spline - order 4 on f = sin(x) + 2 over 0 to 4pi (thesis Fig 3.3 function)", "[cubic-spline][kernel]") {
   // Max error of both fields (sin x + 2, cos x) over 1001 points, uniform data with 41 -> 81 -> 161 points, measured:
   //   not-a-knot, [0, 4π]:       2.61e-4 -> 1.69e-5 -> 1.06e-6   (orders 3.95, 3.99; 21 points is pre-asymptotic)
   //   natural, [0, 4π]:          4.90e-3 -> 1.21e-3              (order 2.0: cos'' ≠ 0 at the ends, z'' = 0 there)

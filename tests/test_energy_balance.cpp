@@ -12,7 +12,7 @@
 using namespace mpm;
 using Catch::Contains;
 
-TEST_CASE("the energy balance integrates the external power and tolerates losses, not gains", "[energy]") {
+TEST_CASE("the energy balance integrates the external power and tolerates losses but not gains", "[energy]") {
   // a mass falling from rest under gravity: P = m g² t, W = m g² t² / 2 = E(t); the trapezoid rule is exact
   const double m = 2.0, g = 9.81, dt = 1e-3;
   EnergyBalance b(0.1, 0.0, 0.0, 0.0);
@@ -90,10 +90,11 @@ TEST_CASE("healthy runs keep their energy balance: the body force's work explain
   }
 }
 
-TEST_CASE("a run that gains energy no force explains stops with exit 3, the balance and the last good step",
+TEST_CASE("a run that gains energy no force explains stops with exit 3 and reports the balance and the last good step",
           "[energy][guards]") {
   // the stability suite's block impact (tools/scenes/stability/block-impact.json) with BSMPM-TLS MUSL at E = 1e6:
-  // every value stays finite and J > 0, but kinetic + strain energy grows to ~50 E(0) while gravity does ~−E(0)
+  // every value stays finite and J > 0, but the energy gains 0.35 of its scale more than gravity's work explains
+  // (measured; direct mapping: 0.02)
   nlohmann::json scene = {
       {"dimension", 2},
       {"grid", {{"length", {1.0, 1.0}}, {"cells", {20, 20}}, {"basis", "bspline2"}}},
@@ -116,6 +117,6 @@ TEST_CASE("a run that gains energy no force explains stops with exit 3, the bala
     scene["time"]["energy_tolerance"] = 1e9;
     const RunResult relaxed = run(scene);
     CHECK(relaxed.status == exit_ok);
-    CHECK(gain(relaxed) > 0.5);
+    CHECK(gain(relaxed) > 0.15);  // above the default bound over the whole run, not only at the stop
   }
 }
