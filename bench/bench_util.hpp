@@ -34,7 +34,9 @@ struct Grid2D {
   std::vector<double> m;
   std::array<std::vector<double>, 2> q, f, v, a;
 
-  explicit Grid2D(int functions_per_axis) : stride1(functions_per_axis), dofs(functions_per_axis * functions_per_axis) {
+  /// Quadratic B-splines: rows carry the ghost column of the kernels' padding lane (kernels/stencil.hpp).
+  explicit Grid2D(int functions_per_axis)
+      : stride1(mpm::grid_stride(functions_per_axis, 3)), dofs(stride1 * functions_per_axis) {
     m.assign(dofs, 0.0);
     for (int d = 0; d < 2; ++d)
       for (auto* x : {&q[d], &f[d], &v[d], &a[d]}) x->assign(dofs, 0.0);
