@@ -295,18 +295,25 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     };
     const auto own_rho = own(density_of);
     const auto own_v = own(velocity_of);
-    // The unconstrained fits (velocity, stress) have no integral to anchor them: with fewer than three samples
-    // per Taylor function their slopes amplify particle noise (measured at A = 0.1: the plate blows up with 2×2
-    // particles per cell and a linear fit through 4 particles, and with 3×2 and a fit through 6), and the constant
-    // instead under-integrates the force (1 stress per cell: the 64² plate at A = 0.05 drifts to an error of 24 %
-    // of the amplitude). Such cells fit the same degree to their own and the 8 neighbouring cells' particles
-    // (thesis §5.2.3, Fig. 5.7), counted as a neighbour fallback: with 2×2 particles per cell the plate then
-    // converges (A = 0.1: u 1.7e-3 → 5.1e-4 from 32² to 64²; docs/RECONSTRUCTION.md).
-    const bool enough = own_range.second - own_range.first >= 3 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
+    // The unconstrained fits (velocity, stress) have no integral to anchor them. From its own particles alone a cell
+    // fits them only with at least two samples per Taylor function and a well-conditioned normal matrix (relative
+    // pivot ≥ 1e-3 after equilibration, not just full rank); otherwise it fits the same degree to its own and its 8
+    // neighbours' particles (thesis §5.2.3, Fig. 5.7; a `neighbour` fallback). Measured on the plate at A = 0.1
+    // (docs/RECONSTRUCTION.md): a constant stress per cell under-integrates the force (64², 2×2 particles: u error
+    // 24 % of A at A = 0.05); a linear fit through 4 particles blows up (exit 3), and so does one through 6 (3×2)
+    // whose layout compression has flattened; requiring 3 samples per function instead of the conditioning test
+    // also completes but stalls at 64² (2×2: u 2.0e-3 → 1.6e-3, against 1.7e-3 → 5.1e-4 with this rule).
+    constexpr double own_fit_pivot = 1e-3;
+    const bool enough = own_range.second - own_range.first >= 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
     auto fit_ls = [&](auto src) {
-      constexpr int K = decltype(src)::fields;
-      if (!enough) for_each_cell_near(c, 1, [&](std::size_t n) { if (n != c) src.add(cells.block_range(n)); });
-      auto fit = reconstruct_ls<Degree>(cell_box(c), src, NoSamples<Dim, K>{});
+      auto neighbours = src;
+      neighbours.n = 0;
+      for_each_cell_near(c, 1, [&](std::size_t n) {
+        if (n != c) (enough ? neighbours : src).add(cells.block_range(n));
+      });
+      TlsOptions opt;
+      opt.rank_threshold = own_fit_pivot;
+      auto fit = reconstruct_ls<Degree>(cell_box(c), src, neighbours, opt);
       if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
       counts[c].add(fit.status);
       return fit;
