@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include "engine/point_load.hpp"
 #include "kernels/quadrature.hpp"
 #include "kernels/transfer.hpp"
 
@@ -307,6 +308,9 @@ Simulation<Dim>::Simulation(const Scene& scene)
     particle_cells_.emplace(c, l, 1);
   }
   pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force());
+  if (problem_->has_point_loads())
+    for (auto& st : pipeline_)
+      if (st.rfind("p2g-force", 0) == 0) st += "+point-load";
   if (gauss_) {  // every scatter reads the Gauss points, rebuilt from the particles just before it
     const std::string rebuild = std::string(gauss_->name()) + "-rebuild+";
     std::vector<std::string> stages;
@@ -541,6 +545,8 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
       });
       if constexpr (Fields.momentum) check_momentum(sum_totals(block_momentum_));
     }
+    if constexpr (Fields.force)
+      if (problem_->has_point_loads()) add_point_loads<Dim, S>(basis, gv, problem_->point_loads(time_, pv, np));
     if constexpr (Fields.mass) check_mass();
   };
   if (particle_cells_) {
