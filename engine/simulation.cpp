@@ -662,19 +662,24 @@ RunErrors Simulation<Dim>::errors() const {
   }
   std::array<std::span<const double>, sym_components<Dim>> sig;
   for (int c = 0; c < sym_components<Dim>; ++c) sig[c] = s.column(Field::stress, c);
-  double eu = 0, ev = 0, es = 0;
+  double eu = 0, ev = 0, es = 0, nu = 0, ns = 0;  // n*: Σ of the exact field squared
   for (std::size_t p = 0; p < n; ++p) {
     std::array<double, Dim> Xp;
     for (int d = 0; d < Dim; ++d) Xp[d] = X[d][p];
     const ExactState<Dim> ex = problem_->exact(Xp, time_);
     for (int d = 0; d < Dim; ++d) {
       eu += std::pow(x[d][p] - X[d][p] - ex.u[d], 2);
+      nu += ex.u[d] * ex.u[d];
       ev += std::pow(v[d][p] - ex.v[d], 2);
     }
     for (int a = 0; a < Dim; ++a)
-      for (int b = 0; b < Dim; ++b) es += std::pow(sig[sym_index<Dim>(a, b)][p] - ex.sigma[a * Dim + b], 2);
+      for (int b = 0; b < Dim; ++b) {
+        es += std::pow(sig[sym_index<Dim>(a, b)][p] - ex.sigma[a * Dim + b], 2);
+        ns += ex.sigma[a * Dim + b] * ex.sigma[a * Dim + b];
+      }
   }
-  return {std::sqrt(eu / n), std::sqrt(ev / n), std::sqrt(es / n)};
+  const auto relative = [](double e, double ref) { return ref > 0 ? std::sqrt(e / ref) : std::nan(""); };
+  return {std::sqrt(eu / n), std::sqrt(ev / n), std::sqrt(es / n), relative(eu, nu), relative(es, ns)};
 }
 
 template <int Dim>
