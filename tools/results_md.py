@@ -258,8 +258,8 @@ times are in `{rel}/NAME/study.csv`). The whole script ran in {a.seconds} s on t
 other work, so wall times are indicative.
 
 Settings chosen for minutes, not hours: the plate runs to T = 0.0125 s (5/8 of a period, where every exact field is
-non-zero — at the paper's T = 0.2 s the exact displacement and stress are zero, PROBLEMS.md), on 8–64 cells, MLS
-on 8–32 only: MLS takes about 4× longer per refinement (see `wall_s` below), so 64×64 alone would take ~15 min. Everything else uses the papers' own parameters.
+non-zero — at the paper's T = 0.2 s the exact displacement and stress are zero, PROBLEMS.md), on the paper's 8–64
+cells. BSMPM-MLS on 64×64 cells is most of the script's time (see `wall s` below). Everything else uses the papers' own parameters.
 
 ## 1. Vibrating plate, A = 0.1 — paper Figs 2–4
 
