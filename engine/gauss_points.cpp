@@ -49,6 +49,7 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene)
     // tensor-product Gauss–Legendre rule of the unit cell (paper eqs 22–25, thesis eq. 3.3)
     std::array<GaussRule, Dim> rules;
     for (int d = 0; d < Dim; ++d) rules[d] = gauss_legendre(scene.algorithm.gauss_per_cell[d]);
+    cell_rule_ = rules[0];
     const int n0 = rules[0].x.size(), n1 = Dim > 1 ? rules[Dim - 1].x.size() : 1;
     for (int j = 0; j < n1; ++j)
       for (int i = 0; i < n0; ++i) {
@@ -108,15 +109,21 @@ MomentumTotals<Dim> GaussPoints<Dim>::sort_by_position(const ParticleView<Dim>& 
 template <int Dim>
 void GaussPoints<Dim>::place_half_span(std::size_t c, int half, double lo, double hi, double* w) {
   const double a = cell_box(c).lo[0] + 0.5 * half * h_[0];
-  const double a_in = std::max(a, lo), b_in = std::min(a + 0.5 * h_[0], hi);
-  const int n = static_cast<int>(half_rule_.x.size());
-  // the part of the half inside the body gets the whole rule (its points stay in cell c, so the binning holds)
+  const std::size_t n = half_rule_.x.size();
+  place_clipped(c * per_cell_ + half * n, half_rule_, a, a + 0.5 * h_[0], lo, hi, w);
+}
+
+template <int Dim>
+double GaussPoints<Dim>::place_clipped(std::size_t first, const GaussRule& rule, double a, double b, double lo,
+                                       double hi, double* w) {
+  const double a_in = std::max(a, lo), b_in = std::min(b, hi);
+  // the part inside the body gets the whole rule (its points stay in [a, b], inside one cell: the binning holds)
   const bool inside = b_in > a_in;
-  for (int j = 0; j < n; ++j) {
-    const std::size_t g = c * per_cell_ + half * n + j;
-    x_[0][g] = inside ? a_in + half_rule_.x[j] * (b_in - a_in) : a + half_rule_.x[j] * 0.5 * h_[0];
-    w[j] = inside ? half_rule_.w[j] * (b_in - a_in) : 0.0;
+  for (std::size_t j = 0; j < rule.x.size(); ++j) {
+    x_[0][first + j] = inside ? a_in + rule.x[j] * (b_in - a_in) : a + rule.x[j] * (b - a);
+    w[j] = inside ? rule.w[j] * (b_in - a_in) : 0.0;
   }
+  return inside ? b_in - a_in : 0.0;
 }
 
 template <int Dim>

@@ -5,6 +5,10 @@
 // take the particles' place in the P2G scatter. Gauss points never move: they are binned into coloured blocks
 // once. TLS fixes each cell's first Taylor coefficient from the particle sums, so the grid receives exactly
 // Σ m_p and Σ m_p v_p (Gauss rules with ≥ 2 points per axis integrate the quadratic Taylor basis exactly).
+// In 1D the TLS cell is the occupied part of the cell: the cell clipped to the body's current extent
+// (body_extent.hpp). Spreading a partly filled end cell's mass over the whole cell puts mass where there is no
+// body and, measured on the column (4 particles per cell, 50 cells), made its displacement error 8e-2 against
+// 4.7e-5 for direct mapping; on the clipped cell the Taylor basis is mean-free again, so eq. 5.9 still conserves.
 //
 // The cubic-spline (CS) mapping (1D, thesis §3.2) reconstructs globally instead: one cubic spline per field
 // through all particles of the body, evaluated at `gauss_per_cell` Gauss points in each half of every knot
@@ -16,6 +20,7 @@
 
 #include <tbb/parallel_for.h>
 
+#include "engine/body_extent.hpp"
 #include "engine/cell_bins.hpp"
 #include "engine/scene.hpp"
 #include "kernels/cubic_spline.hpp"
@@ -101,6 +106,9 @@ class GaussPoints {
   /// Places the Gauss points of half `half` of cell c on its part inside [lo, hi] (thesis Fig. 3.4); returns
   /// their weights into `w` (all zero when the half lies outside).
   void place_half_span(std::size_t c, int half, double lo, double hi, double* w);
+  /// Places `rule` (on [0, 1]) on the part of [a, b] inside [lo, hi], as points first, first + 1, ... (1D); their
+  /// weights into `w` (all zero, points spread over [a, b], when nothing is inside). Returns the part's length.
+  double place_clipped(std::size_t first, const GaussRule& rule, double a, double b, double lo, double hi, double* w);
   /// Zeroes what Gauss point g carries.
   void clear_point(std::size_t g) {
     m_[g] = 0.0;
@@ -141,6 +149,7 @@ class GaussPoints {
   FallbackCounts fallbacks_;
   // cubic-spline mapping only (1D)
   GaussRule half_rule_;                                    ///< Gauss rule of a half knot span, on [0, 1]
+  GaussRule cell_rule_;                                    ///< 1D TLS: the Gauss rule of a cell, on [0, 1]
   std::vector<unsigned> sorted_;                           ///< particle indices by position
   std::vector<MomentumTotals<Dim>> cell_totals_;
   CubicSpline<1 + Dim> mass_spline_;                       ///< ρ, ρv
@@ -276,6 +285,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
   std::vector<MomentumTotals<Dim>> totals(ncells);
   std::vector<FallbackCounts> counts(ncells);
   const unsigned* order = cells.order().data();
+  Extent1d extent{-1e300, 1e300};
+  if constexpr (Dim == 1) extent = body_extent_1d(p, cells.order().size());
 
   tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
     const auto own_range = cells.block_range(c);
@@ -331,7 +342,15 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
       }
       totals[c].add(p.m[ip], v);
     }
-    const CellBox<Dim> box = cell_box(c);
+    CellBox<Dim> box = cell_box(c);
+    if constexpr (Dim == 1) {  // the occupied part of the cell: its Gauss points and the Taylor basis move there
+      double w[16];            // ≤ 10 points per cell (scene range of gauss_per_cell)
+      const double len = place_clipped(first, cell_rule_, box.lo[0], box.hi[0], extent.lo, extent.hi, w);
+      if (len > 0) {
+        box.lo[0] = std::max(box.lo[0], extent.lo);
+        box.hi[0] = std::min(box.hi[0], extent.hi);
+      }
+    }
     const double volume = box.volume();
     std::vector<Vec<Dim>> points(per_cell_);
     for (int g = 0; g < per_cell_; ++g)
@@ -452,9 +471,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_cubic_spline(const ParticleView<Di
     if (mass_spline_.size() < 2) ++fallbacks_.constant;
     // The body's current extent: the end particles' domains, x_p ∓ V_p/2, reach the body's ends, and the
     // spline is extrapolated there (thesis Fig. 3.3); outside it no Gauss point carries anything.
-    const unsigned first = sorted_.front(), last = sorted_.back();
-    const double lo = p.x[0][first] - 0.5 * fields.volume(first);
-    const double hi = p.x[0][last] + 0.5 * fields.volume(last);
+    const auto [lo, hi] = body_extent_1d(p, sorted_.size());
     const int n = static_cast<int>(half_rule_.x.size());
     tbb::parallel_for(std::size_t(0), static_cast<std::size_t>(cells_[0]), [&](std::size_t c) {
       for (int half = 0; half < 2; ++half) {

@@ -36,6 +36,15 @@ template <int Dim>
 using BodyForce = std::conditional_t<Dim == 2, std::variant<NoBodyForce, UniformBodyForce<Dim>, PlateBodyForce>,
                                      std::variant<NoBodyForce, UniformBodyForce<Dim>>>;
 
+/// A force concentrated at a point of the current configuration: a traction on a boundary point of a 1D body
+/// (thesis §4.6.2: τ(x⁰, t) = δ(x⁰ − l) σ(l, t)). Its grid share is the boundary term of thesis eq. 2.21,
+/// f_i += φ_i(x) force (unit cross-section), added after the internal forces (engine/point_load.hpp).
+template <int Dim>
+struct PointLoad {
+  std::array<double, Dim> x{};      ///< where it acts now
+  std::array<double, Dim> force{};  ///< N (per unit cross-section in 1D: Pa)
+};
+
 /// Exact fields at a reference position and time.
 template <int Dim>
 struct ExactState {
@@ -60,6 +69,10 @@ class Problem {
   virtual bool has_body_force() const { return false; }
   /// The body force at time t; `X` are the reference-position columns (null if not stored).
   virtual BodyForce<Dim> body_force(double t, std::array<const double*, Dim> X) const;
+  /// Whether the problem loads the grid with point forces (then point_loads is called at every force scatter).
+  virtual bool has_point_loads() const { return false; }
+  /// The point forces at time t on the current particles (n of them).
+  virtual std::vector<PointLoad<Dim>> point_loads(double t, const ParticleView<Dim>& p, std::size_t n) const;
   virtual bool has_exact() const { return false; }
   virtual ExactState<Dim> exact(const std::array<double, Dim>& X, double t) const;
 };

@@ -290,7 +290,9 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
     const RunErrors err = sim.errors();
     j["errors"] = {{"displacement_rms", err.displacement_rms},
                    {"velocity_rms", err.velocity_rms},
-                   {"stress_rms", err.stress_rms}};
+                   {"stress_rms", err.stress_rms},
+                   {"displacement_rel_l2", err.displacement_rel_l2},
+                   {"stress_rel_l2", err.stress_rel_l2}};
   }
   j["conservation"] = {{"mass_rel_max", sim.conservation().mass_rel_max},
                        {"momentum_rel_max", sim.conservation().momentum_rel_max}};

@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include "engine/point_load.hpp"
 #include "kernels/quadrature.hpp"
 #include "kernels/transfer.hpp"
 
@@ -308,6 +309,9 @@ Simulation<Dim>::Simulation(const Scene& scene)
     particle_cells_.emplace(c, l, 1);
   }
   pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force());
+  if (problem_->has_point_loads())
+    for (auto& st : pipeline_)
+      if (st.rfind("p2g-force", 0) == 0) st += "+point-load";
   if (gauss_) {  // every scatter reads the Gauss points, rebuilt from the particles just before it
     const std::string rebuild = std::string(gauss_->name()) + "-rebuild+";
     std::vector<std::string> stages;
@@ -539,6 +543,8 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
       });
       if constexpr (Fields.momentum) check_momentum(sum_totals(block_momentum_));
     }
+    if constexpr (Fields.force)
+      if (problem_->has_point_loads()) add_point_loads<Dim, S>(basis, gv, problem_->point_loads(time_, pv, np));
     if constexpr (Fields.mass) check_mass();
   };
   if (particle_cells_) {
@@ -654,19 +660,24 @@ RunErrors Simulation<Dim>::errors() const {
   }
   std::array<std::span<const double>, sym_components<Dim>> sig;
   for (int c = 0; c < sym_components<Dim>; ++c) sig[c] = s.column(Field::stress, c);
-  double eu = 0, ev = 0, es = 0;
+  double eu = 0, ev = 0, es = 0, nu = 0, ns = 0;  // n*: Σ of the exact field squared
   for (std::size_t p = 0; p < n; ++p) {
     std::array<double, Dim> Xp;
     for (int d = 0; d < Dim; ++d) Xp[d] = X[d][p];
     const ExactState<Dim> ex = problem_->exact(Xp, time_);
     for (int d = 0; d < Dim; ++d) {
       eu += std::pow(x[d][p] - X[d][p] - ex.u[d], 2);
+      nu += ex.u[d] * ex.u[d];
       ev += std::pow(v[d][p] - ex.v[d], 2);
     }
     for (int a = 0; a < Dim; ++a)
-      for (int b = 0; b < Dim; ++b) es += std::pow(sig[sym_index<Dim>(a, b)][p] - ex.sigma[a * Dim + b], 2);
+      for (int b = 0; b < Dim; ++b) {
+        es += std::pow(sig[sym_index<Dim>(a, b)][p] - ex.sigma[a * Dim + b], 2);
+        ns += ex.sigma[a * Dim + b] * ex.sigma[a * Dim + b];
+      }
   }
-  return {std::sqrt(eu / n), std::sqrt(ev / n), std::sqrt(es / n)};
+  const auto relative = [](double e, double ref) { return ref > 0 ? std::sqrt(e / ref) : std::nan(""); };
+  return {std::sqrt(eu / n), std::sqrt(ev / n), std::sqrt(es / n), relative(eu, nu), relative(es, ns)};
 }
 
 template <int Dim>

@@ -33,9 +33,11 @@ struct Conservation {
   double momentum_rel_max = 0.0;
 };
 
-/// RMS errors over particles against the exact solution (paper eq. 43).
+/// RMS errors over particles against the exact solution (paper eq. 43), and the relative L2 errors of thesis
+/// Figs 5.12–5.14, sqrt(Σ_p |f_p − f(X_p)|² / Σ_p |f(X_p)|²) (NaN where the exact field is zero everywhere).
 struct RunErrors {
   double displacement_rms = 0.0, velocity_rms = 0.0, stress_rms = 0.0;
+  double displacement_rel_l2 = 0.0, stress_rel_l2 = 0.0;
 };
 
 struct Energy {

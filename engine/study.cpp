@@ -95,6 +95,7 @@ StudyRow blank_row() {
   StudyRow r;
   r.wall_s = r.particle_steps_per_s = kNaN;
   r.displacement_rms = r.velocity_rms = r.stress_rms = kNaN;
+  r.displacement_rel_l2 = r.stress_rel_l2 = kNaN;
   r.mass_rel_max = r.momentum_rel_max = r.fallbacks = kNaN;
   r.cell_size = kNaN;
   return r;
@@ -162,6 +163,8 @@ StudyRow run_row(const json& scene_json, int repeat, int threads) {
   row.displacement_rms = number_at(s, "errors", "displacement_rms");
   row.velocity_rms = number_at(s, "errors", "velocity_rms");
   row.stress_rms = number_at(s, "errors", "stress_rms");
+  row.displacement_rel_l2 = number_at(s, "errors", "displacement_rel_l2");
+  row.stress_rel_l2 = number_at(s, "errors", "stress_rel_l2");
   row.mass_rel_max = number_at(s, "conservation", "mass_rel_max");
   row.momentum_rel_max = number_at(s, "conservation", "momentum_rel_max");
   if (s.contains("fallbacks") && s["fallbacks"].is_object()) {
@@ -206,7 +209,7 @@ std::string csv_line(const std::vector<std::string>& fields) {
 std::vector<std::string> csv_row(const StudyRow& r) {
   std::vector<std::string> f = r.values;
   for (double v : {r.wall_s, r.particle_steps_per_s, r.displacement_rms, r.velocity_rms, r.stress_rms,
-                   r.mass_rel_max, r.momentum_rel_max, r.fallbacks})
+                   r.displacement_rel_l2, r.stress_rel_l2, r.mass_rel_max, r.momentum_rel_max, r.fallbacks})
     f.push_back(csv_number(v));
   f.push_back(csv_count(r.steps));
   f.push_back(csv_count(r.particles));
@@ -366,6 +369,8 @@ void write_h5(const std::string& path, const json& scene, const std::vector<Stud
     doubles("displacement_rms", &StudyRow::displacement_rms);
     doubles("velocity_rms", &StudyRow::velocity_rms);
     doubles("stress_rms", &StudyRow::stress_rms);
+    doubles("displacement_rel_l2", &StudyRow::displacement_rel_l2);
+    doubles("stress_rel_l2", &StudyRow::stress_rel_l2);
     doubles("mass_rel_max", &StudyRow::mass_rel_max);
     doubles("momentum_rel_max", &StudyRow::momentum_rel_max);
     doubles("fallbacks", &StudyRow::fallbacks);
@@ -495,7 +500,7 @@ void validate_study(const nlohmann::json& base, const std::vector<StudyAxis>& ax
 std::vector<std::string> study_columns(const std::vector<std::string>& keys) {
   std::vector<std::string> c = keys;
   for (const char* name : {"wall_s", "particle_steps_per_s", "displacement_rms", "velocity_rms", "stress_rms",
-                           "mass_rel_max", "momentum_rel_max", "fallbacks", "steps", "particles", "status", "reason"})
+                           "displacement_rel_l2", "stress_rel_l2", "mass_rel_max", "momentum_rel_max", "fallbacks", "steps", "particles", "status", "reason"})
     c.push_back(name);
   return c;
 }

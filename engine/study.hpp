@@ -62,6 +62,7 @@ struct StudyRow {
   std::vector<std::string> values;  ///< display_value() of each axis' value
   double wall_s = 0, particle_steps_per_s = 0;
   double displacement_rms = 0, velocity_rms = 0, stress_rms = 0;
+  double displacement_rel_l2 = 0, stress_rel_l2 = 0;  ///< thesis Figs 5.12–5.14
   double mass_rel_max = 0, momentum_rel_max = 0, fallbacks = 0;
   long steps = -1, particles = -1;
   double cell_size = 0;        ///< smallest grid.length / grid.cells over the axes, m

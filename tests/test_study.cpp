@@ -180,7 +180,7 @@ TEST_CASE("a small vibrating-bar study: 4 rows - CSV and HDF5 - errors decrease 
   REQUIRE(lines.size() == 5);
   CHECK(lines[0] ==
         "grid.cells,algorithm.mass,wall_s,particle_steps_per_s,displacement_rms,velocity_rms,stress_rms,"
-        "mass_rel_max,momentum_rel_max,fallbacks,steps,particles,status,reason");
+        "displacement_rel_l2,stress_rel_l2,mass_rel_max,momentum_rel_max,fallbacks,steps,particles,status,reason");
   CHECK(lines[1].rfind("[10],lumped,", 0) == 0);
   CHECK(lines[4].rfind("[20],projection,", 0) == 0);
   CHECK(lines[1].size() > 8);

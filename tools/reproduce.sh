@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# Regenerates docs/RESULTS.md and docs/results/: every table and figure there comes from the `mpm study` runs
+# below (each study's command is written beside its CSV and quoted in RESULTS.md). Sized for minutes on 2 cores:
+# the plate runs to T = 0.0125 s (5/8 of a period, where every exact field is non-zero; PROBLEMS.md) instead of
+# the paper's T = 0.2 s, on 8-64 cells (MLS on 64x64 alone takes ~6 min: most of the script's time).
+#
+# Usage: tools/reproduce.sh [--mpm build/tools/mpm] [--threads 2]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+MPM=build/tools/mpm
+THREADS=2
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --mpm) MPM=$2; shift 2 ;;
+    --threads) THREADS=$2; shift 2 ;;
+    *) echo "usage: tools/reproduce.sh [--mpm PATH] [--threads N]" >&2; exit 2 ;;
+  esac
+done
+OUT=docs/results
+mkdir -p "$OUT"
+start=$(date +%s)
+
+# study NAME SCENE ARGS...: one `mpm study` into docs/results/NAME, its command line kept beside the table
+study() {
+  local name=$1; shift
+  rm -rf "${OUT:?}/$name"
+  mkdir -p "$OUT/$name"
+  echo "mpm study $*" > "$OUT/$name/command.txt"
+  echo "== $name: mpm study $*"
+  "$MPM" study "$@" --threads "$THREADS" --out "$OUT/$name" > "$OUT/$name/table.txt"
+  # the CSV holds the same table (tools/plot_study.py redraws its plots); only text and the combined PNGs are kept
+  rm -f "$OUT/$name/study.h5" "$OUT/$name/convergence.png" "$OUT/$name/error_vs_time.png"
+}
+
+PLATE_CELLS='grid.cells=[8,8],[16,16],[32,32],[64,64]'
+# paper Figs 2-4: plate, A = 0.1 (plate-paper.json), MPM, BSMPM, BSMPM-MLS, BSMPM-TLS
+study plate-mpm tools/scenes/plate-paper.json --set time.end=0.0125 --set grid.basis=linear --vary "$PLATE_CELLS"
+study plate-bsmpm tools/scenes/plate-paper.json --set time.end=0.0125 --vary "$PLATE_CELLS" \
+  --vary algorithm.mapping=direct,tls
+# MLS: its own study, so that the cross product does not run MPM with MLS
+study plate-mls tools/scenes/plate-paper.json --set time.end=0.0125 --set algorithm.mapping=mls --vary "$PLATE_CELLS"
+# thesis Fig 5.9 and Table 5.3: bar without grid crossing (Table 5.2), 5-40 cells, 12 particles per cell
+study bar-mpm tools/scenes/bar.json --repeat 5 --set grid.basis=linear --vary 'grid.cells=[5],[10],[20],[40]' \
+  --vary algorithm.mapping=direct,cubic-spline,tls
+study bar-bsmpm tools/scenes/bar.json --repeat 5 --vary 'grid.cells=[5],[10],[20],[40]' \
+  --vary algorithm.mapping=direct,cubic-spline,tls
+# thesis Figs 5.12-5.13 and Table 5.5: large-deformation bar (Table 5.4), 20 cells, 8 particles per cell
+study bar-large tools/scenes/bar-large.json --vary 'grid.cells=[20],[40],[80]' --vary grid.basis=linear,bspline2 \
+  --vary algorithm.mapping=direct,cubic-spline,tls
+# thesis Fig 5.14 and Table 5.7: column compaction (Table 5.6), 50 cells, 20 particles per cell
+study column tools/scenes/column-compaction.json --vary 'grid.cells=[25],[50],[100]' \
+  --vary grid.basis=linear,bspline2 --vary algorithm.mapping=direct,cubic-spline,tls
+# thesis §4.6.2: bar with a traction at its free end (neo-Hookean as in the thesis, and linear elastic)
+study bar-traction tools/scenes/bar-traction.json --vary 'grid.cells=[20],[40],[80],[160]' \
+  --vary material.model=neo-hookean,linear-elastic --vary algorithm.mapping=direct,cubic-spline,tls
+
+/usr/bin/python3 tools/results_md.py --results "$OUT" --out docs/RESULTS.md --seconds $(( $(date +%s) - start ))
+echo "wrote docs/RESULTS.md and $OUT/ in $(( $(date +%s) - start )) s"
