@@ -222,7 +222,7 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
   long steps_timed = 0;
   try {
     while (!sim.finished()) {
-      if (sim.steps_done() % backup_every == 0) backup = sim.save_state();
+      if (sim.steps_done() % backup_every == 0) sim.save_state(backup);
       const auto t0 = Clock::now();
       sim.step();
       stepping_s += seconds_since(t0);

@@ -123,6 +123,8 @@ class Simulation {
   int last_cg_iterations() const { return cg_iterations_; }
 
   SimulationState save_state() const;
+  /// The same into an existing state, reusing its memory: a periodic backup then never holds two copies at once.
+  void save_state(SimulationState& into) const;
   /// Restores a state of this scene; throws std::invalid_argument if its columns do not match this run's.
   void load_state(const SimulationState& state);
 
