@@ -65,6 +65,9 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene)
       }
   }
   per_cell_ = static_cast<int>(local_.size());
+  if (per_cell_ > max_per_cell)  // the scene caps gauss_per_cell at 10 per axis
+    throw std::logic_error("GaussPoints: " + std::to_string(per_cell_) + " Gauss points per cell, at most " +
+                           std::to_string(max_per_cell) + " supported");
   const std::size_t n = ncells * per_cell_;
   m_.assign(n, 0.0);
   for (int d = 0; d < Dim; ++d) {

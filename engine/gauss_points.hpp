@@ -15,6 +15,7 @@
 // span (thesis §3.2.3, Fig. 3.4: two per half), restricted to the body's current extent. It is the thesis'
 // non-conservative comparison method: ∫ρ̂ and ∫ρv̂ differ from Σ m_p and Σ m_p v_p by the interpolation error.
 #include <array>
+#include <span>
 #include <stdexcept>
 #include <vector>
 
@@ -51,17 +52,14 @@ inline void scatter_gauss(const TensorBasis<Dim, Axis>& basis, const GaussView<D
     double xg[Dim];
     for (int d = 0; d < Dim; ++d) xg[d] = gp.x[d][ig];
     const auto st = stencil_at<Dim, S>(basis, xg);
-    for_each_node(st, g.stride1, [&](int i, double w, const std::array<double, Dim>& dw) {
-      if constexpr (Fields.mass) g.m[i] += w * gp.m[ig];
-      for (int d = 0; d < Dim; ++d) {
-        if constexpr (Fields.momentum) g.q[d][i] += w * gp.q[d][ig];
-        if constexpr (Fields.force) {
-          double fi = Body ? w * gp.fb[d][ig] : 0.0;
-          for (int l = 0; l < Dim; ++l) fi -= dw[l] * gp.s[sym_index<Dim>(l, d)][ig];
-          g.f[d][i] += fi;
-        }
-      }
-    });
+    double mv[Dim] = {}, Vsig[Dim][Dim] = {}, mb[Dim] = {};
+    for (int d = 0; d < Dim; ++d) {
+      if constexpr (Fields.momentum) mv[d] = gp.q[d][ig];
+      if constexpr (Body && Fields.force) mb[d] = gp.fb[d][ig];
+      if constexpr (Fields.force)
+        for (int l = 0; l < Dim; ++l) Vsig[l][d] = gp.s[sym_index<Dim>(l, d)][ig];
+    }
+    scatter_rows<Fields>(st, g, Fields.mass ? gp.m[ig] : 0.0, mv, Vsig, mb);
   }
 }
 
@@ -139,6 +137,7 @@ class GaussPoints {
   double mls_support_;
   std::array<int, Dim> cells_;
   std::array<double, Dim> h_;
+  static constexpr int max_per_cell = 100;  ///< scene: gauss_per_cell ≤ 10 per axis (per-cell buffers on the stack)
   int per_cell_ = 1;                    ///< Gauss points per cell
   std::vector<std::array<double, Dim>> local_;  ///< Gauss points of the unit cell, in [0, 1]^Dim
   std::vector<double> local_w_;                 ///< their weights (sum 1)
@@ -249,8 +248,8 @@ namespace detail {
 /// it, a fit through a few clustered particles of a strongly compressed cell extrapolates to wild (even
 /// negative) densities at the Gauss points, which is how 2D MPM–TLS diverges (thesis §6.3.1).
 template <int Dim, int K, class Fit, class Source>
-void limited_values(const Fit& fit, const Source& own, const std::vector<Vec<Dim>>& points,
-                    std::vector<Eigen::Matrix<double, K, 1>>& values) {
+void limited_values(const Fit& fit, const Source& own, std::span<const Vec<Dim>> points,
+                    Eigen::Matrix<double, K, 1>* values) {
   const Eigen::Matrix<double, K, 1> mean = fit.c.row(0).transpose();
   Eigen::Matrix<double, K, 1> lo = mean, hi = mean;
   own.for_each([&](const Vec<Dim>&, const Eigen::Matrix<double, K, 1>& f, double) {
@@ -266,7 +265,7 @@ void limited_values(const Fit& fit, const Source& own, const std::vector<Vec<Dim
       if (dev < 0) alpha[k] = std::min(alpha[k], (lo[k] - mean[k]) / dev);
     }
   }
-  for (auto& v : values) v = mean + alpha.cwiseProduct(v - mean);
+  for (std::size_t g = 0; g < points.size(); ++g) values[g] = mean + alpha.cwiseProduct(values[g] - mean);
 }
 
 }  // namespace detail
@@ -295,8 +294,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
       for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
       return;
     }
-    // Completion with the particles of neighbouring cells (thesis §5.2.3) is not used: measured on the plate at
-    // A = 0.1, it biases the slopes of compressed cells and made the 64-cell error 2.4x larger (docs/RESULTS.md);
+    // The density fit uses the cell's own particles only: completing it from the neighbouring cells (thesis
+    // §5.2.3) was measured to bias the slopes of compressed cells (plate, A = 0.1: 64-cell error 2.4x larger);
     // a cell its own particles do not determine drops to a lower degree instead, conservative all the same.
     auto own = [&](auto values) {
       detail::ParticleRanges<Dim, decltype(values(std::size_t{}))::RowsAtCompileTime, decltype(values)> src{
@@ -352,19 +351,21 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
       }
     }
     const double volume = box.volume();
-    std::vector<Vec<Dim>> points(per_cell_);
+    // per-cell buffers on the stack: no allocation per cell and rebuild
+    std::array<Vec<Dim>, max_per_cell> point_buffer;
+    const std::span<const Vec<Dim>> points(point_buffer.data(), per_cell_);
     for (int g = 0; g < per_cell_; ++g)
-      for (int d = 0; d < Dim; ++d) points[g][d] = x_[d][first + g];
+      for (int d = 0; d < Dim; ++d) point_buffer[g][d] = x_[d][first + g];
     const auto rho_fit = reconstruct_tls<Degree>(box, own_rho, NoSamples<Dim, 1>{}, mass);
     counts[c].add(rho_fit.status);
-    std::vector<Eigen::Matrix<double, 1, 1>> rho(per_cell_);
-    detail::limited_values<Dim, 1>(rho_fit, own_rho, points, rho);
+    std::array<Eigen::Matrix<double, 1, 1>, max_per_cell> rho;
+    detail::limited_values<Dim, 1>(rho_fit, own_rho, points, rho.data());
     // Momentum as ρ̂ v̂, not a fit of ρv (beyond the thesis, which fits ρv, eq. 5.9): v̂ is bounded by the cell's
     // particle velocities, so a nodal velocity Σφρ̂v̂ω / Σφρ̂ω is a weighted mean of bounded values even where the
     // nodal mass is tiny. Fitting ρ and ρv apart let their ratio run away at such nodes (v ≈ 2e4 m/s on the
     // 64² plate with 2×2 particles per cell). The mean of v̂ is shifted so that Σ_g ρ̂v̂ω = Σ m_p v_p exactly.
-    std::vector<Eigen::Matrix<double, Dim, 1>> vel(per_cell_);
-    detail::limited_values<Dim, Dim>(fit_ls(own_v), own_v, points, vel);
+    std::array<Eigen::Matrix<double, Dim, 1>, max_per_cell> vel;
+    detail::limited_values<Dim, Dim>(fit_ls(own_v), own_v, points, vel.data());
     double m_g = 0.0;
     Eigen::Matrix<double, Dim, 1> q_g = Eigen::Matrix<double, Dim, 1>::Zero();
     for (int g = 0; g < per_cell_; ++g) {
@@ -378,8 +379,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
       for (int d = 0; d < Dim; ++d) q_[d][first + g] = m_[first + g] * (vel[g][d] + shift[d]);
     if (!stress) return;
     const auto own_s = own(stress_of);
-    std::vector<Eigen::Matrix<double, KS, 1>> sval(per_cell_);
-    detail::limited_values<Dim, KS>(fit_ls(own_s), own_s, points, sval);
+    std::array<Eigen::Matrix<double, KS, 1>, max_per_cell> sval;
+    detail::limited_values<Dim, KS>(fit_ls(own_s), own_s, points, sval.data());
     for (int g = 0; g < per_cell_; ++g) {
       const double w = local_w_[g] * volume;
       for (int k = 0; k < sym_components<Dim>; ++k) s_[k][first + g] = w * sval[g][k];

@@ -89,6 +89,27 @@ inline MomentumTotals<Dim> sum_totals(const std::vector<MomentumTotals<Dim>>& pa
   return r;
 }
 
+/// One carrier's share of the selected grid sums, a stencil row at a time: m_i += φ_i m, q_i += φ_i mv,
+/// f_i += φ_i mb − ∇φ_i·Vσ (eqs 2.31–2.33). A particle passes m_p, m_p v_p, V_p σ_p, m_p b_p; a Gauss point its
+/// reconstructed ρ̂ω, ρv̂ω, σ̂ω, ρb̂ω (paper eqs 22–25).
+template <ScatterFields Fields, int Dim, int S>
+MPM_INLINE void scatter_rows(const Stencil<Dim, S>& st, const GridView<Dim>& g, double m, const double (&mv)[Dim],
+                             const double (&Vsig)[Dim][Dim], const double (&mb)[Dim]) {
+  for_each_row(st, g.stride1, [&](int row, double wy, double dwy) {
+    const RowVector<S> w = st.wx * wy;
+    const RowVector<S> dw[2] = {st.dwx * wy, st.wx * dwy};  // ∇φ (the second only in 2D)
+    if constexpr (Fields.mass) add_to_row(g.m + row, w * m);
+    if constexpr (Fields.momentum)
+      for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, w * mv[d]);
+    if constexpr (Fields.force)
+      for (int d = 0; d < Dim; ++d) {
+        RowVector<S> fi = w * mb[d];
+        for (int l = 0; l < Dim; ++l) fi -= dw[l] * Vsig[l][d];
+        add_to_row(g.f[d] + row, fi);
+      }
+  });
+}
+
 /// P2G over particles order[begin..end): adds the selected sums into the grid; returns the particle momentum of
 /// the range when momentum is scattered.
 template <ScatterFields Fields, int Dim, int S, class Axis, class Body>
@@ -122,19 +143,7 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, cons
         for (int d = 0; d < Dim; ++d) mb[d] = mp * b[d];
       }
     }
-    for_each_row(st, g.stride1, [&](int row, double wy, double dwy) {
-      const RowVector<S> w = st.wx * wy;
-      const RowVector<S> dw[2] = {st.dwx * wy, st.wx * dwy};  // ∇φ (the second only in 2D)
-      if constexpr (Fields.mass) add_to_row(g.m + row, w * mp);
-      if constexpr (Fields.momentum)
-        for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, w * mv[d]);
-      if constexpr (Fields.force)
-        for (int d = 0; d < Dim; ++d) {
-          RowVector<S> fi = w * mb[d];
-          for (int l = 0; l < Dim; ++l) fi -= dw[l] * Vsig[l][d];
-          add_to_row(g.f[d] + row, fi);
-        }
-    });
+    scatter_rows<Fields>(st, g, mp, mv, Vsig, mb);
   }
   return totals;
 }
