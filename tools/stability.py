@@ -215,7 +215,7 @@ def build_families() -> list[Family]:
     # -- cells that empty and refill
     f = Family("empty", "Cells that empty and refill",
                "`bar-traction.json`: thesis §4.6.2 (neo-Hookean bar with end traction in a longer grid; cells empty "
-               "during the run; n/a until the engine has the problem). `block-falling.json`: a 0.2 × 0.2 m block "
+               "during the run). `block-falling.json`: a 0.2 × 0.2 m block "
                "falling under gravity through empty grid (40×40 cells, cfl 0.5) and hitting the fixed floor at "
                "t ≈ 0.23 s (T = 0.4 s); its drift includes the work of gravity (the energy has no potential term). "
                "`block-moving-1d/2d.json`: a free block moving at constant velocity across empty cells for 0.5 s "
