@@ -130,18 +130,6 @@ double GaussPoints<Dim>::place_clipped(std::size_t first, const GaussRule& rule,
 }
 
 template <int Dim>
-CellBox<Dim> GaussPoints<Dim>::cell_box(std::size_t c) const {
-  CellBox<Dim> box;
-  for (int d = 0; d < Dim; ++d) {
-    const int i = static_cast<int>(c % cells_[d]);
-    c /= cells_[d];
-    box.lo[d] = i * h_[d];
-    box.hi[d] = (i + 1) * h_[d];
-  }
-  return box;
-}
-
-template <int Dim>
 GaussView<Dim> GaussPoints<Dim>::view() const {
   GaussView<Dim> v;
   for (int d = 0; d < Dim; ++d) {

@@ -15,6 +15,8 @@
 // span (thesis §3.2.3, Fig. 3.4: two per half), restricted to the body's current extent. It is the thesis'
 // non-conservative comparison method: ∫ρ̂ and ∫ρv̂ differ from Σ m_p and Σ m_p v_p by the interpolation error.
 #include <array>
+#include <limits>
+#include <memory>
 #include <span>
 #include <stdexcept>
 #include <vector>
@@ -90,9 +92,9 @@ class GaussPoints {
   }
 
  private:
-  template <int Degree, class Body>
-  MomentumTotals<Dim> rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body,
-                                  bool stress);
+  /// TLS; σ and ρb only when Stress.
+  template <int Degree, bool Stress, class Body>
+  MomentumTotals<Dim> rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body);
   template <class Body>
   MomentumTotals<Dim> rebuild_mls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body,
                                   bool stress);
@@ -113,7 +115,40 @@ class GaussPoints {
     for (int d = 0; d < Dim; ++d) q_[d][g] = fb_[d][g] = 0.0;
     for (auto& col : s_) col[g] = 0.0;
   }
-  CellBox<Dim> cell_box(std::size_t cell) const;
+  CellBox<Dim> cell_box(std::size_t c) const {
+    CellBox<Dim> box;
+    for (int d = 0; d < Dim; ++d) {
+      const int i = static_cast<int>(c % cells_[d]);
+      c /= cells_[d];
+      box.lo[d] = i * h_[d];
+      box.hi[d] = (i + 1) * h_[d];
+    }
+    return box;
+  }
+  /// Storage of type T for n items that outlives a rebuild: no allocation per step once it is large enough, one
+  /// store per type (the two rebuilds of a MUSL step use different ones; sharing one store reallocated it twice a
+  /// step: 8 % of a 1e6-particle TLS step went to its page faults).
+  template <class T>
+  std::vector<T>& scratch(std::size_t n) {
+    Scratch<T>* s = nullptr;
+    for (const auto& store : scratch_)
+      if ((s = dynamic_cast<Scratch<T>*>(store.get()))) break;
+    if (!s) {
+      auto fresh = std::make_unique<Scratch<T>>();
+      s = fresh.get();
+      scratch_.push_back(std::move(fresh));
+    }
+    s->items.resize(n);
+    return s->items;
+  }
+  /// Calls f(n) for the cells n next to cell c along `axis` (one or two).
+  template <class F>
+  void for_each_neighbour_along(std::size_t c, int axis, F&& f) const {
+    const std::size_t stride = axis == 0 ? 1 : static_cast<std::size_t>(cells_[0]);
+    const int i = static_cast<int>(axis == 0 ? c % cells_[0] : c / cells_[0]);
+    if (i > 0) f(c - stride);
+    if (i + 1 < cells_[axis]) f(c + stride);
+  }
   /// Calls f(n) for every cell n within `reach` cells of cell c along each axis (c included), row-major order.
   template <class F>
   void for_each_cell_near(std::size_t c, int reach, F&& f) const {
@@ -146,6 +181,14 @@ class GaussPoints {
   std::array<std::vector<double>, sym_components<Dim>> s_;
   CellBins<Dim> bins_;
   FallbackCounts fallbacks_;
+  struct ScratchBase {
+    virtual ~ScratchBase() = default;
+  };
+  template <class T>
+  struct Scratch : ScratchBase {
+    std::vector<T> items;
+  };
+  std::vector<std::unique_ptr<ScratchBase>> scratch_;  ///< per-cell sums of TLS rebuilds, kept between passes
   // cubic-spline mapping only (1D)
   GaussRule half_rule_;                                    ///< Gauss rule of a half knot span, on [0, 1]
   GaussRule cell_rule_;                                    ///< 1D TLS: the Gauss rule of a cell, on [0, 1]
@@ -202,10 +245,13 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild(const ParticleView<Dim>& p, const 
                                               const Body& body, bool stress) {
   if (mapping_ == Mapping::mls) return rebuild_mls(p, cells, body, stress);
   if (mapping_ == Mapping::cubic_spline) return rebuild_cubic_spline(p, cells, body, stress);
+  auto tls = [&]<int Degree>() {
+    return stress ? rebuild_tls<Degree, true>(p, cells, body) : rebuild_tls<Degree, false>(p, cells, body);
+  };
   switch (tls_degree_) {
-    case 0: return rebuild_tls<0>(p, cells, body, stress);
-    case 1: return rebuild_tls<1>(p, cells, body, stress);
-    default: return rebuild_tls<2>(p, cells, body, stress);
+    case 0: return tls.template operator()<0>();
+    case 1: return tls.template operator()<1>();
+    default: return tls.template operator()<2>();
   }
 }
 
@@ -222,12 +268,6 @@ struct ParticleFields {
     for (int d = 0; d < Dim; ++d) f[1 + d] = f[0] * p->v[d][ip];
     return f;
   }
-  Eigen::Matrix<double, 1, 1> density(std::size_t ip) const { return Eigen::Matrix<double, 1, 1>(rho(ip)); }
-  Eigen::Matrix<double, Dim, 1> velocity(std::size_t ip) const {
-    Eigen::Matrix<double, Dim, 1> v;
-    for (int d = 0; d < Dim; ++d) v[d] = p->v[d][ip];
-    return v;
-  }
   Eigen::Matrix<double, sym_components<Dim> + Dim, 1> stress(std::size_t ip) const {
     Eigen::Matrix<double, sym_components<Dim> + Dim, 1> f;
     for (int c = 0; c < sym_components<Dim>; ++c) f[c] = p->s[c][ip];
@@ -243,68 +283,171 @@ namespace detail {
 
 /// Bounds the reconstruction at the Gauss points by the data it came from (a Barth–Jespersen-type limiter):
 /// per field, the deviations from the cell mean are scaled by the largest α ∈ [0, 1] that keeps every Gauss-point
-/// value inside [min, max] of the cell's samples and its mean. The higher Taylor functions integrate to zero over
-/// the cell, so scaling them leaves the integral — mass, momentum — exactly as the constraint set it. Without
-/// it, a fit through a few clustered particles of a strongly compressed cell extrapolates to wild (even
-/// negative) densities at the Gauss points, which is how 2D MPM–TLS diverges (thesis §6.3.1).
-template <int Dim, int K, class Fit, class Source>
-void limited_values(const Fit& fit, const Source& own, std::span<const Vec<Dim>> points,
-                    Eigen::Matrix<double, K, 1>* values) {
+/// value inside [min, max] of the cell's samples and its mean (`lo`, `hi`: the samples' bounds). The higher
+/// Taylor functions integrate to zero over the cell, so scaling them leaves the integral — mass, momentum —
+/// exactly as the constraint set it. Without it, a fit through a few clustered particles of a strongly compressed
+/// cell extrapolates to wild (even negative) densities at the Gauss points, which is how 2D MPM–TLS diverges
+/// (thesis §6.3.1).
+template <int Dim, int K, class Fit>
+void limited_values(const Fit& fit, Eigen::Matrix<double, K, 1> lo, Eigen::Matrix<double, K, 1> hi,
+                    std::span<const Vec<Dim>> points, Eigen::Matrix<double, K, 1>* values) {
   const Eigen::Matrix<double, K, 1> mean = fit.c.row(0).transpose();
-  Eigen::Matrix<double, K, 1> lo = mean, hi = mean;
-  own.for_each([&](const Vec<Dim>&, const Eigen::Matrix<double, K, 1>& f, double) {
-    lo = lo.cwiseMin(f);
-    hi = hi.cwiseMax(f);
-  });
+  lo = lo.cwiseMin(mean);
+  hi = hi.cwiseMax(mean);
   Eigen::Matrix<double, K, 1> alpha = Eigen::Matrix<double, K, 1>::Ones();
-  for (std::size_t g = 0; g < points.size(); ++g) {
-    values[g] = fit(points[g]);
+  fit.evaluate(points, values);
+  for (std::size_t g = 0; g < points.size(); ++g)
     for (int k = 0; k < K; ++k) {
       const double dev = values[g][k] - mean[k];
       if (dev > 0) alpha[k] = std::min(alpha[k], (hi[k] - mean[k]) / dev);
       if (dev < 0) alpha[k] = std::min(alpha[k], (lo[k] - mean[k]) / dev);
     }
-  }
   for (std::size_t g = 0; g < points.size(); ++g) values[g] = mean + alpha.cwiseProduct(values[g] - mean);
 }
+
+/// What a TLS rebuild sums per cell over the cell's own particles, in the cell's Taylor frame, in its first pass:
+/// the normal system of all K fields (ρ | v | σ, ρb — the fits share the samples, hence D), the fields' bounds for
+/// the limiter, and the cell's mass and momentum for the constraints.
+template <int Dim, int Degree, int K>
+struct TlsCellSums {
+  TaylorNormalSystem<Dim, Degree, K> sys;
+  /// Fields 1.. (the unconstrained fits) of this cell and its two neighbours along axis 0, in this cell's frame:
+  /// the first half of a separable 3×3 (1D: 3) neighbourhood sum.
+  TaylorNormalSystem<Dim, Degree, K - 1> row;
+  Eigen::Matrix<double, K, 1> lo = Eigen::Matrix<double, K, 1>::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Matrix<double, K, 1> hi = -lo;
+  double mass = 0.0;
+  Eigen::Matrix<double, Dim, 1> momentum = Eigen::Matrix<double, Dim, 1>::Zero();
+  /// Fields [first, first + count) of the system, as a system of their own.
+  template <int First, int Count>
+  TaylorNormalSystem<Dim, Degree, Count> fields() const {
+    TaylorNormalSystem<Dim, Degree, Count> f;
+    f.D = sys.D;
+    f.b = sys.b.template middleCols<Count>(First);
+    f.shift = sys.shift.template segment<Count>(First);
+    f.shift_set = sys.shift_set;
+    f.points = sys.points;
+    return f;
+  }
+};
 
 }  // namespace detail
 
 template <int Dim>
-template <int Degree, class Body>
+template <int Degree, bool Stress, class Body>
 MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
-                                                  const Body& body, bool stress) {
-  constexpr int KS = sym_components<Dim> + Dim;
-  const ParticleFields<Dim, Body> fields{&p, &body};
-  auto density_of = [&](std::size_t ip) { return fields.density(ip); };
-  auto velocity_of = [&](std::size_t ip) { return fields.velocity(ip); };
-  auto stress_of = [&](std::size_t ip) { return fields.stress(ip); };
+                                                  const Body& body) {
+  constexpr int KS = Stress ? sym_components<Dim> + Dim : 0;  // σ, ρb
+  constexpr int KF = Dim + KS;                                 // the unconstrained fits: v | σ, ρb
+  using Sums = detail::TlsCellSums<Dim, Degree, 1 + KF>;
+  using Values = Eigen::Matrix<double, 1 + KF, 1>;     // what a particle gives: ρ | v | σ, ρb
+  using FitValues = Eigen::Matrix<double, KF, 1>;
+  using FitSystem = detail::TaylorNormalSystem<Dim, Degree, KF>;
   std::size_t ncells = 1;
   for (int d = 0; d < Dim; ++d) ncells *= cells_[d];
   std::vector<MomentumTotals<Dim>> totals(ncells);
   std::vector<FallbackCounts> counts(ncells);
+  std::vector<Sums>& sums = scratch<Sums>(ncells);
   const unsigned* order = cells.order().data();
   Extent1d extent{-1e300, 1e300};
   if constexpr (Dim == 1) extent = body_extent_1d(p, cells.order().size());
+  // In 1D the TLS cell is the occupied part of the cell (see the top of this file).
+  auto tls_box = [&](std::size_t c) {
+    CellBox<Dim> box = cell_box(c);
+    if constexpr (Dim == 1)
+      if (std::max(box.lo[0], extent.lo) < std::min(box.hi[0], extent.hi)) {
+        box.lo[0] = std::max(box.lo[0], extent.lo);
+        box.hi[0] = std::min(box.hi[0], extent.hi);
+      }
+    return box;
+  };
 
+  // Pass 1: each particle is read once, into the sums of its cell. The neighbourhood fits of pass 3 move the sums
+  // of the neighbouring cells into their own frame (TaylorChange) instead of revisiting those cells' particles,
+  // separably: pass 2 sums each cell's row of three along axis 0, pass 3 the rows of three along axis 1, four
+  // one-axis moves per cell instead of eight general ones. On the 2D plate with 2×2 particles per cell, where
+  // every velocity and stress fit needs the 3×3 neighbourhood, this and the fixed-size solve cut the rebuild
+  // from 5.6e3 to ... instructions per particle (callgrind). Neighbours weigh as much as own particles here
+  // (TlsOptions::neighbour_weight = 1, the thesis' choice): a separable sum cannot weigh them apart.
   tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
-    const auto own_range = cells.block_range(c);
+    const auto [begin, end] = cells.block_range(c);
+    Sums& cs = sums[c];
+    cs = Sums{};
+    if (begin == end) return;
+    const TaylorFrame<Dim> frame(tls_box(c));
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::size_t ip = order[k];
+      Values f;
+      Vec<Dim> x;
+      double v[Dim];
+      const double rho = p.m[ip] / (det(p, ip) * p.V0[ip]);  // V_p = J_p V0_p (eq. 2.42)
+      f[0] = rho;
+      for (int d = 0; d < Dim; ++d) {
+        x[d] = p.x[d][ip];
+        f[1 + d] = v[d] = p.v[d][ip];
+      }
+      if constexpr (Stress) {
+        for (int i = 0; i < sym_components<Dim>; ++i) f[1 + Dim + i] = p.s[i][ip];
+        std::array<double, Dim> b{};
+        if constexpr (Body::active) b = body.template at<Dim>(ip);
+        for (int d = 0; d < Dim; ++d) f[1 + Dim + sym_components<Dim> + d] = rho * b[d];
+      }
+      cs.sys.add_sample(frame.xi(x), f, 1.0);
+      cs.lo = cs.lo.cwiseMin(f);
+      cs.hi = cs.hi.cwiseMax(f);
+      cs.mass += p.m[ip];
+      for (int d = 0; d < Dim; ++d) cs.momentum[d] += p.m[ip] * v[d];
+      totals[c].add(p.m[ip], v);
+    }
+    cs.sys.points = end - begin;
+  });
+
+  auto frame_of = [&](std::size_t c) { return TaylorFrame<Dim>(tls_box(c)); };
+  // Pass 2: row sums, for every cell (a cell without particles may still join its neighbours' sums).
+  tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
+    Sums& cs = sums[c];
+    cs.row = cs.template fields<1, KF>();
+    const TaylorFrame<Dim> frame = frame_of(c);
+    for_each_neighbour_along(c, 0, [&](std::size_t n) {
+      const auto& ns = sums[n].sys;
+      cs.row.add_moved(ns.D, ns.b.template rightCols<KF>(), ns.shift.template tail<KF>(), ns.points,
+                       TaylorChange<Dim, Degree, 1u>(frame_of(n), frame), 1.0);
+    });
+  });
+
+  // Pass 3: the fits, the limiter and the Gauss-point values, per cell.
+  tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
+    const Sums& cs = sums[c];
     const std::size_t first = c * per_cell_;
-    if (own_range.first == own_range.second) {  // an empty cell carries nothing: nothing to conserve there
+    if (cs.sys.points == 0) {  // an empty cell carries nothing: nothing to conserve there
       for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
       return;
     }
+    const CellBox<Dim> box = tls_box(c);
+    if constexpr (Dim == 1) {  // the occupied part of the cell: its Gauss points move there
+      const CellBox<Dim> whole = cell_box(c);
+      double w[16];            // ≤ 10 points per cell (scene range of gauss_per_cell)
+      place_clipped(first, cell_rule_, whole.lo[0], whole.hi[0], extent.lo, extent.hi, w);
+    }
+    const double volume = box.volume();
+    // per-cell buffers on the stack: no allocation per cell and rebuild
+    std::array<Vec<Dim>, max_per_cell> point_buffer;
+    const std::span<const Vec<Dim>> points(point_buffer.data(), per_cell_);
+    for (int g = 0; g < per_cell_; ++g)
+      for (int d = 0; d < Dim; ++d) point_buffer[g][d] = x_[d][first + g];
+
     // The density fit uses the cell's own particles only: completing it from the neighbouring cells (thesis
     // §5.2.3) was measured to bias the slopes of compressed cells (plate, A = 0.1: 64-cell error 2.4x larger);
     // a cell its own particles do not determine drops to a lower degree instead, conservative all the same.
-    auto own = [&](auto values) {
-      detail::ParticleRanges<Dim, decltype(values(std::size_t{}))::RowsAtCompileTime, decltype(values)> src{
-          &p, order, values};
-      src.add(own_range);
-      return src;
-    };
-    const auto own_rho = own(density_of);
-    const auto own_v = own(velocity_of);
+    // The cell's mass Σ m_p fixes the first Taylor coefficient of ρ (thesis eq. 5.9).
+    auto rho_sys = cs.template fields<0, 1>();
+    rho_sys.reshift(Eigen::Matrix<double, 1, 1>(cs.mass / volume));
+    const auto rho_fit = detail::complete_fit<Degree>(box, rho_sys, true, [](auto&) { return false; }, TlsOptions{});
+    counts[c].add(rho_fit.status);
+    std::array<Eigen::Matrix<double, 1, 1>, max_per_cell> rho;
+    detail::limited_values<Dim, 1>(rho_fit, cs.lo.template head<1>().eval(), cs.hi.template head<1>().eval(),
+                                   points, rho.data());
+
     // The unconstrained fits (velocity, stress) have no integral to anchor them. From its own particles alone a cell
     // fits them only with at least two samples per Taylor function and a well-conditioned normal matrix (relative
     // pivot ≥ 1e-3 after equilibration, not just full rank); otherwise it fits the same degree to its own and its 8
@@ -314,77 +457,48 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     // whose layout compression has flattened; requiring 3 samples per function instead of the conditioning test
     // also completes but stalls at 64² (2×2: u 2.0e-3 → 1.6e-3, against 1.7e-3 → 5.1e-4 with this rule).
     constexpr double own_fit_pivot = 1e-3;
-    const bool enough = own_range.second - own_range.first >= 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
-    auto fit_ls = [&](auto src) {
-      auto neighbours = src;
-      neighbours.n = 0;
-      for_each_cell_near(c, 1, [&](std::size_t n) {
-        if (n != c) (enough ? neighbours : src).add(cells.block_range(n));
-      });
-      TlsOptions opt;
-      opt.rank_threshold = own_fit_pivot;
-      auto fit = reconstruct_ls<Degree>(cell_box(c), src, neighbours, opt);
-      if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
-      counts[c].add(fit.status);
-      return fit;
+    TlsOptions opt;
+    opt.rank_threshold = own_fit_pivot;
+    const TaylorFrame<Dim> frame(box);
+    auto add_neighbours = [&](FitSystem& sys) {  // own + neighbours: the rows above and below moved to this one
+      sys = cs.row;
+      if constexpr (Dim == 2)
+        for_each_neighbour_along(c, 1, [&](std::size_t n) {
+          sys.add_moved(sums[n].row, TaylorChange<Dim, Degree, 2u>(frame_of(n), frame), 1.0);
+        });
+      return sys.points > cs.sys.points;
     };
-    // the cell's mass Σ m_p fixes the first Taylor coefficient of ρ (thesis eq. 5.9)
-    Eigen::Matrix<double, 1, 1> mass = Eigen::Matrix<double, 1, 1>::Zero();
-    Eigen::Matrix<double, Dim, 1> momentum = Eigen::Matrix<double, Dim, 1>::Zero();
-    for (std::size_t k = own_range.first; k < own_range.second; ++k) {
-      const std::size_t ip = order[k];
-      double v[Dim];
-      mass[0] += p.m[ip];
-      for (int d = 0; d < Dim; ++d) {
-        v[d] = p.v[d][ip];
-        momentum[d] += p.m[ip] * v[d];
-      }
-      totals[c].add(p.m[ip], v);
-    }
-    CellBox<Dim> box = cell_box(c);
-    if constexpr (Dim == 1) {  // the occupied part of the cell: its Gauss points and the Taylor basis move there
-      double w[16];            // ≤ 10 points per cell (scene range of gauss_per_cell)
-      const double len = place_clipped(first, cell_rule_, box.lo[0], box.hi[0], extent.lo, extent.hi, w);
-      if (len > 0) {
-        box.lo[0] = std::max(box.lo[0], extent.lo);
-        box.hi[0] = std::min(box.hi[0], extent.hi);
-      }
-    }
-    const double volume = box.volume();
-    // per-cell buffers on the stack: no allocation per cell and rebuild
-    std::array<Vec<Dim>, max_per_cell> point_buffer;
-    const std::span<const Vec<Dim>> points(point_buffer.data(), per_cell_);
-    for (int g = 0; g < per_cell_; ++g)
-      for (int d = 0; d < Dim; ++d) point_buffer[g][d] = x_[d][first + g];
-    const auto rho_fit = reconstruct_tls<Degree>(box, own_rho, NoSamples<Dim, 1>{}, mass);
-    counts[c].add(rho_fit.status);
-    std::array<Eigen::Matrix<double, 1, 1>, max_per_cell> rho;
-    detail::limited_values<Dim, 1>(rho_fit, own_rho, points, rho.data());
+    auto fit_sys = cs.template fields<1, KF>();
+    const bool enough = cs.sys.points >= 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
+    if (!enough) add_neighbours(fit_sys);
+    auto fit = detail::complete_fit<Degree>(box, fit_sys, false,
+                                            [&](auto& sys) { return enough && add_neighbours(sys); }, opt);
+    if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
+    counts[c].add(fit.status);
+    std::array<FitValues, max_per_cell> values;
+    detail::limited_values<Dim, KF>(fit, cs.lo.template tail<KF>().eval(), cs.hi.template tail<KF>().eval(), points,
+                                    values.data());
+
     // Momentum as ρ̂ v̂, not a fit of ρv (beyond the thesis, which fits ρv, eq. 5.9): v̂ is bounded by the cell's
     // particle velocities, so a nodal velocity Σφρ̂v̂ω / Σφρ̂ω is a weighted mean of bounded values even where the
     // nodal mass is tiny. Fitting ρ and ρv apart let their ratio run away at such nodes (v ≈ 2e4 m/s on the
     // 64² plate with 2×2 particles per cell). The mean of v̂ is shifted so that Σ_g ρ̂v̂ω = Σ m_p v_p exactly.
-    std::array<Eigen::Matrix<double, Dim, 1>, max_per_cell> vel;
-    detail::limited_values<Dim, Dim>(fit_ls(own_v), own_v, points, vel.data());
     double m_g = 0.0;
     Eigen::Matrix<double, Dim, 1> q_g = Eigen::Matrix<double, Dim, 1>::Zero();
     for (int g = 0; g < per_cell_; ++g) {
       const double w = local_w_[g] * volume;
       m_[first + g] = w * rho[g][0];
       m_g += m_[first + g];
-      q_g += m_[first + g] * vel[g];
+      q_g += m_[first + g] * values[g].template head<Dim>();
     }
-    const Eigen::Matrix<double, Dim, 1> shift = (momentum - q_g) / m_g;
-    for (int g = 0; g < per_cell_; ++g)
-      for (int d = 0; d < Dim; ++d) q_[d][first + g] = m_[first + g] * (vel[g][d] + shift[d]);
-    if (!stress) return;
-    const auto own_s = own(stress_of);
-    std::array<Eigen::Matrix<double, KS, 1>, max_per_cell> sval;
-    detail::limited_values<Dim, KS>(fit_ls(own_s), own_s, points, sval.data());
+    const Eigen::Matrix<double, Dim, 1> shift = (cs.momentum - q_g) / m_g;
     for (int g = 0; g < per_cell_; ++g) {
       const double w = local_w_[g] * volume;
-      for (int k = 0; k < sym_components<Dim>; ++k) s_[k][first + g] = w * sval[g][k];
-      for (int d = 0; d < Dim; ++d) fb_[d][first + g] = w * sval[g][sym_components<Dim> + d];
+      for (int d = 0; d < Dim; ++d) q_[d][first + g] = m_[first + g] * (values[g][d] + shift[d]);
+      if constexpr (Stress) {
+        for (int k = 0; k < sym_components<Dim>; ++k) s_[k][first + g] = w * values[g][Dim + k];
+        for (int d = 0; d < Dim; ++d) fb_[d][first + g] = w * values[g][Dim + sym_components<Dim> + d];
+      }
     }
   });
   for (const auto& c : counts) fallbacks_ += c;

@@ -128,27 +128,54 @@ struct FallbackCounts {
 namespace detail {
 
 /// Solves the symmetric positive semi-definite normal system D x = r (N unknowns, K right-hand sides) if D has
-/// full rank; returns false without touching x otherwise. Rank is decided by a fully pivoted LU of the
-/// Jacobi-equilibrated matrix S D S (S = diag(D_ii^{-1/2})), a pivot counting as zero below `threshold` times
-/// the largest one. On a semi-definite matrix the largest entry is on the diagonal and every Schur complement
-/// stays semi-definite, so full pivoting is diagonal pivoting — a pivoted Cholesky, rank-revealing for such
-/// matrices. The equilibration makes the test independent of the scaling of the basis functions and of the
-/// sample weights; since D = Bᵀ W B, a relative threshold τ on D is √τ on the singular values of the sample
-/// matrix B (τ = 1e-10: columns dependent to 1e-5 count as dependent). Never detected afterwards by NaN.
-/// (ColPivHouseholderQR works as well, but its solve instantiates Eigen's blocked-Householder path, which makes
-/// g++ 12 emit a spurious -Wmaybe-uninitialized inside Eigen.)
+/// full rank; returns false without touching x otherwise. Rank is decided by a Cholesky factorisation with
+/// diagonal pivoting (LDLᵀ) of the Jacobi-equilibrated matrix S D S (S = diag(D_ii^{-1/2})), a pivot counting as
+/// zero below `threshold` times the first (largest) one. On a semi-definite matrix the largest entry is on the
+/// diagonal and every Schur complement stays semi-definite, so this is what full pivoting would choose: a
+/// rank-revealing factorisation for such matrices. The equilibration makes the test independent of the scaling
+/// of the basis functions and of the sample weights; since D = Bᵀ W B, a relative threshold τ on D is √τ on the
+/// singular values of the sample matrix B (τ = 1e-10: columns dependent to 1e-5 count as dependent). Never
+/// detected afterwards by NaN. Written out for fixed N ≤ 6 instead of Eigen's FullPivLU, whose solve goes
+/// through the dynamic-size triangular-solve and GEMM kernels: per cell of a TLS rebuild that was a third of
+/// the reconstruction's instructions (callgrind, 2D plate, 2×2 particles per cell).
 template <int N, int K, class DerivedD, class DerivedR>
 inline bool solve_full_rank(const Eigen::MatrixBase<DerivedD>& D, const Eigen::MatrixBase<DerivedR>& r,
                             double threshold, Eigen::Matrix<double, N, K>& x) {
   Eigen::Matrix<double, N, 1> s;
-  for (int i = 0; i < N; ++i) s[i] = D(i, i) > 0.0 ? 1.0 / std::sqrt(D(i, i)) : 0.0;  // zero column: rank < N
-  const Eigen::Matrix<double, N, N> Ds = s.asDiagonal() * D * s.asDiagonal();
-  Eigen::FullPivLU<Eigen::Matrix<double, N, N>> lu;
-  lu.setThreshold(threshold);
-  lu.compute(Ds);
-  if (lu.rank() < N) return false;
-  const Eigen::Matrix<double, N, K> rs = s.asDiagonal() * r;
-  x = s.asDiagonal() * lu.solve(rs);
+  for (int i = 0; i < N; ++i) {
+    if (!(D(i, i) > 0.0)) return false;  // a zero column: rank < N
+    s[i] = 1.0 / std::sqrt(D(i, i));
+  }
+  Eigen::Matrix<double, N, N> A = s.asDiagonal() * D * s.asDiagonal();  // unit diagonal
+  Eigen::Matrix<double, N, K> y = s.asDiagonal() * r;
+  std::array<int, N> perm;
+  double first = 0.0;
+  for (int k = 0; k < N; ++k) {
+    int p = k;
+    for (int i = k + 1; i < N; ++i)
+      if (A(i, i) > A(p, p)) p = i;
+    if (k == 0) first = A(p, p);
+    if (!(A(p, p) > threshold * first)) return false;
+    perm[k] = p;
+    if (N > 1 && p != k) {  // symmetric swap of k and p, and of the right-hand sides (N > 1: g++ 12 warns else)
+      A.row(k).swap(A.row(p));
+      A.col(k).swap(A.col(p));
+      y.row(k).swap(y.row(p));
+    }
+    for (int i = k + 1; i < N; ++i)  // Schur complement (both triangles: the next pivot swap reads whole rows)
+      for (int j = k + 1; j <= i; ++j) A(j, i) = A(i, j) -= A(i, k) * A(j, k) / A(k, k);
+    for (int i = k + 1; i < N; ++i) {  // column k below the pivot becomes L(:, k)
+      A(i, k) /= A(k, k);
+      y.row(i) -= A(i, k) * y.row(k);  // forward substitution with L, interleaved
+    }
+  }
+  for (int k = N - 1; k >= 0; --k) {  // D⁻¹, then back substitution with Lᵀ
+    y.row(k) /= A(k, k);
+    for (int i = k + 1; i < N; ++i) y.row(k) -= A(i, k) * y.row(i);
+  }
+  for (int k = N - 1; k >= 0; --k)  // undo the swaps, last first
+    if (N > 1 && perm[k] != k) y.row(k).swap(y.row(perm[k]));
+  x = s.asDiagonal() * y;
   return true;
 }
 

@@ -65,6 +65,77 @@ struct TaylorFrame {
   Vec<Dim> xi(const Vec<Dim>& x) const { return (x - centre).cwiseProduct(inv_half); }
 };
 
+/// The change of Taylor frame: the N×N matrix G with ψ_to(x) = G ψ_from(x) for every x, so that the normal sums
+/// of one cell's samples move to another cell's frame as G D Gᵀ and G b (TaylorNormalSystem::add_moved). With
+/// ξ_to = a ξ_from + δ per axis (a = h_from / h_to, δ = (centre_from − centre_to) / h_to, h the half widths):
+///   ξ_to                = δ + a ξ_from
+///   ξ_to²/2 − 1/6       = (a²/6 + δ²/2 − 1/6) + aδ ξ_from + a² (ξ_from²/2 − 1/6)
+///   ξ1_to ξ2_to         = δ1δ2 + a1δ2 ξ1 + a2δ1 ξ2 + a1a2 ξ1ξ2   (ξ of the from frame)
+/// G is sparse: apply() multiplies by it from these formulas. `Axes` (bit d: axis d) says which axes the frames
+/// differ in; along the others a = 1 and δ = 0 at compile time, so a move along one axis (the separable
+/// neighbourhood sums of a TLS rebuild) costs a fraction of a general one.
+template <int Dim, int Degree, unsigned Axes = (1u << Dim) - 1>
+struct TaylorChange {
+  static constexpr int N = taylor_size<Dim>(Degree);
+  Vec<Dim> a, delta;
+  TaylorChange(const TaylorFrame<Dim>& from, const TaylorFrame<Dim>& to)
+      : a(to.inv_half.cwiseQuotient(from.inv_half)), delta((from.centre - to.centre).cwiseProduct(to.inv_half)) {}
+
+  /// G M, for M with N rows; column by column (contiguous in Eigen's column-major storage).
+  template <class Derived>
+  Eigen::Matrix<double, N, Derived::ColsAtCompileTime> apply(const Eigen::MatrixBase<Derived>& M) const {
+    Eigen::Matrix<double, N, Derived::ColsAtCompileTime> r;
+    for (int j = 0; j < M.cols(); ++j) {
+      const double m0 = M(0, j);
+      r(0, j) = m0;
+      if constexpr (Degree >= 1) {
+        row_linear<0>(M, j, m0, r);
+        if constexpr (Dim == 2) row_linear<1>(M, j, m0, r);
+      }
+      if constexpr (Degree >= 2) {
+        row_square<0>(M, j, m0, r);
+        if constexpr (Dim == 2) {
+          row_square<1>(M, j, m0, r);
+          r(5, j) = scale<0>() * scale<1>() * M(5, j);
+          if constexpr (moves<1>()) r(5, j) += scale<0>() * delta[1] * M(1, j);
+          if constexpr (moves<0>()) r(5, j) += scale<1>() * delta[0] * M(2, j);
+          if constexpr (moves<0>() && moves<1>()) r(5, j) += delta[0] * delta[1] * m0;
+        }
+      }
+    }
+    return r;
+  }
+  /// G D Gᵀ for a symmetric D (the result is symmetric).
+  Eigen::Matrix<double, N, N> congruence(const Eigen::Matrix<double, N, N>& D) const {
+    return apply(apply(D).transpose());
+  }
+  Eigen::Matrix<double, N, N> matrix() const { return apply(Eigen::Matrix<double, N, N>::Identity()); }
+
+ private:
+  template <int D>
+  static constexpr bool moves() {
+    return (Axes >> D) & 1u;
+  }
+  template <int D>
+  double scale() const {
+    if constexpr (moves<D>()) return a[D];
+    return 1.0;
+  }
+  template <int D, class M, class R>
+  void row_linear(const M& m, int j, double m0, R& r) const {  // ψ of ξ_D
+    if constexpr (moves<D>()) r(1 + D, j) = delta[D] * m0 + a[D] * m(1 + D, j);
+    else r(1 + D, j) = m(1 + D, j);
+  }
+  template <int D, class M, class R>
+  void row_square(const M& m, int j, double m0, R& r) const {  // ψ of ξ_D²/2 − 1/6
+    constexpr int q = 1 + Dim + D;
+    if constexpr (moves<D>())
+      r(q, j) = (a[D] * a[D] / 6.0 + 0.5 * delta[D] * delta[D] - 1.0 / 6.0) * m0 + a[D] * delta[D] * m(1 + D, j) +
+                a[D] * a[D] * m(q, j);
+    else r(q, j) = m(q, j);
+  }
+};
+
 /// Taylor basis of `cell` at the physical point x.
 template <int Dim, int Degree>
 inline TaylorVector<Dim, Degree> taylor_basis(const CellBox<Dim>& cell, const Vec<Dim>& x) {
@@ -124,16 +195,49 @@ struct TaylorNormalSystem {
   template <SampleSource S>
   void add(const TaylorFrame<Dim>& fr, const S& s, double scale) {
     s.for_each([&](const Vec<Dim>& x, const Eigen::Matrix<double, K, 1>& f, double weight) {
-      if (!shift_set) {
-        shift = f;
-        shift_set = true;
-      }
-      const TaylorVector<Dim, Degree> psi = taylor_basis_ref<Dim, Degree>(fr.xi(x));
-      const double w = scale * weight;
-      D.noalias() += (w * psi) * psi.transpose();
-      b.noalias() += (w * psi) * (f - shift).transpose();
+      add_sample(fr.xi(x), f, scale * weight);
     });
     points += s.size();
+  }
+  /// One sample at ξ (cell coordinates) with values f and weight w; `points` is the caller's to count.
+  void add_sample(const Vec<Dim>& xi, const Eigen::Matrix<double, K, 1>& f, double w) {
+    if (!shift_set) {
+      shift = f;
+      shift_set = true;
+    }
+    const TaylorVector<Dim, Degree> psi = taylor_basis_ref<Dim, Degree>(xi);
+    D.noalias() += (w * psi) * psi.transpose();
+    b.noalias() += (w * psi) * (f - shift).transpose();
+  }
+  /// The same sums with `s` subtracted instead of the current shift: b += Σ w ψ (shift − s)ᵀ, and Σ w ψ is the
+  /// first column of D (ψ_1 = 1).
+  void reshift(const Eigen::Matrix<double, K, 1>& s) {
+    if (shift_set) b.noalias() += D.col(0) * (shift - s).transpose();
+    shift = s;
+    shift_set = true;
+  }
+  /// Adds samples summed in another cell's frame, `change` = TaylorChange(that frame, this frame): their D, b
+  /// (shifted by `their_shift`) and count. Equal to adding those samples one by one, up to round-off.
+  void add_moved(const TaylorNormalSystem& o, const auto& change, double scale) {
+    add_moved(o.D, o.b, o.shift, o.points, change, scale);
+  }
+  template <unsigned Axes, class DerivedB, class DerivedS>
+  void add_moved(const Eigen::Matrix<double, N, N>& their_D, const Eigen::MatrixBase<DerivedB>& their_b,
+                 const Eigen::MatrixBase<DerivedS>& their_shift, std::size_t their_points,
+                 const TaylorChange<Dim, Degree, Axes>& change, double scale) {
+    if (their_points == 0) return;
+    if (!shift_set) {
+      shift = their_shift;
+      shift_set = true;
+    }
+    Eigen::Matrix<double, N, K> bo;  // their b with this system's shift
+    for (int k = 0; k < K; ++k) {
+      const double dk = their_shift[k] - shift[k];
+      for (int i = 0; i < N; ++i) bo(i, k) = their_b(i, k) + their_D(i, 0) * dk;
+    }
+    D += scale * change.congruence(their_D);
+    b += scale * change.apply(bo);
+    points += their_points;
   }
 
   /// Least squares at degree Deg ≤ Degree. Constrained: unknowns c_1..c_{n−1} (c_0 is fixed and already
@@ -158,21 +262,15 @@ struct TaylorNormalSystem {
   }
 };
 
-/// The completion order shared by the constrained (c_0 given) and the unconstrained fit (c_0 = nullptr).
-template <int Degree, int Dim, int K, SampleSource Own, SampleSource Nb>
-inline TaylorFit<Dim, Degree, K> taylor_fit(const CellBox<Dim>& cell, const Own& own, const Nb& neighbours,
-                                            const Eigen::Matrix<double, K, 1>* c0, const TlsOptions& opt) {
-  static_assert(Own::dim == Dim && Nb::dim == Dim, "sample dimension must match the cell");
-  static_assert(Own::fields == K && Nb::fields == K, "sample field count must match");
+/// The completion order shared by the constrained and the unconstrained fit, on a normal system that holds the
+/// cell's own samples (constrained: shifted by c_0, which the fit keeps). add_neighbours(sys) adds the neighbour
+/// samples to it and returns false if there are none.
+template <int Degree, int Dim, int K, class AddNeighbours>
+inline TaylorFit<Dim, Degree, K> complete_fit(const CellBox<Dim>& cell, TaylorNormalSystem<Dim, Degree, K> sys,
+                                              bool constrained, AddNeighbours&& add_neighbours,
+                                              const TlsOptions& opt) {
   TaylorFit<Dim, Degree, K> fit;
   fit.cell = cell;
-  const TaylorFrame<Dim> fr(cell);
-  TaylorNormalSystem<Dim, Degree, K> sys;
-  if (c0) {
-    sys.shift = *c0;
-    sys.shift_set = true;
-  }
-  sys.add(fr, own, 1.0);
   // Own-sample constant for the unconstrained constant stage: Σ w (f − shift) / Σ w over the cell's samples.
   const double own_w = sys.D(0, 0);
   const Eigen::Matrix<double, K, 1> own_b = sys.b.row(0).transpose();
@@ -183,16 +281,13 @@ inline TaylorFit<Dim, Degree, K> taylor_fit(const CellBox<Dim>& cell, const Own&
     return fit;
   };
   auto solve = [&]<int Deg>() {
-    return c0 ? sys.template solve<Deg, true>(opt, fit.c) : sys.template solve<Deg, false>(opt, fit.c);
+    return constrained ? sys.template solve<Deg, true>(opt, fit.c) : sys.template solve<Deg, false>(opt, fit.c);
   };
 
   // 1. The cell's own samples at the requested degree.
   if (solve.template operator()<Degree>()) return done(FitStage::full, Degree);
   // 2. (a) add the neighbour samples (thesis §5.2.3, Fig. 5.7), same degree.
-  if (neighbours.size() > 0) {
-    sys.add(fr, neighbours, opt.neighbour_weight);
-    if (solve.template operator()<Degree>()) return done(FitStage::neighbour, Degree);
-  }
+  if (add_neighbours(sys) && solve.template operator()<Degree>()) return done(FitStage::neighbour, Degree);
   // 3. (b) lower the degree (thesis §5.2.3: "reducing the number of basis functions"), neighbours kept.
   if constexpr (Degree >= 2) {
     static_assert(Degree == 2, "Taylor degree 0, 1 or 2");
@@ -201,7 +296,7 @@ inline TaylorFit<Dim, Degree, K> taylor_fit(const CellBox<Dim>& cell, const Own&
   // 4. (c) constant. Constrained: c_0 from the integral (it is the shift). Unconstrained: weighted mean of the
   //    cell's own samples, or of the neighbours when the cell has none; zero when there is nothing at all.
   fit.c.setZero();
-  if (!c0) {
+  if (!constrained) {
     if (own_w > 0.0) {
       fit.c.row(0) = (own_b / own_w).transpose();
     } else if (sys.D(0, 0) > 0.0) {
@@ -212,6 +307,24 @@ inline TaylorFit<Dim, Degree, K> taylor_fit(const CellBox<Dim>& cell, const Own&
     }
   }
   return done(FitStage::constant, 0);
+}
+
+/// complete_fit on sample sources, c_0 given (constrained) or nullptr (unconstrained).
+template <int Degree, int Dim, int K, SampleSource Own, SampleSource Nb>
+inline TaylorFit<Dim, Degree, K> taylor_fit(const CellBox<Dim>& cell, const Own& own, const Nb& neighbours,
+                                            const Eigen::Matrix<double, K, 1>* c0, const TlsOptions& opt) {
+  static_assert(Own::dim == Dim && Nb::dim == Dim, "sample dimension must match the cell");
+  static_assert(Own::fields == K && Nb::fields == K, "sample field count must match");
+  const TaylorFrame<Dim> fr(cell);
+  TaylorNormalSystem<Dim, Degree, K> sys;
+  if (c0) sys.reshift(*c0);
+  sys.add(fr, own, 1.0);
+  auto add_neighbours = [&](TaylorNormalSystem<Dim, Degree, K>& s) {
+    if (neighbours.size() == 0) return false;
+    s.add(fr, neighbours, opt.neighbour_weight);
+    return true;
+  };
+  return complete_fit<Degree>(cell, sys, c0 != nullptr, add_neighbours, opt);
 }
 
 }  // namespace detail

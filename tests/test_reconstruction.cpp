@@ -173,6 +173,118 @@ TEST_CASE("Taylor basis: psi_1 integrates to |cell| - all others to zero (thesis
 }
 
 // ================================================================================================================
+namespace {
+
+/// Normal sums of `n` random samples of K random fields in `cell`, shifted by the first sample.
+template <int Dim, int Degree, int K>
+detail::TaylorNormalSystem<Dim, Degree, K> random_sums(const CellBox<Dim>& cell, int n, std::mt19937& rng,
+                                                       std::vector<std::pair<Vec<Dim>, Eigen::Matrix<double, K, 1>>>* kept) {
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  detail::TaylorNormalSystem<Dim, Degree, K> sys;
+  const TaylorFrame<Dim> fr(cell);
+  for (int i = 0; i < n; ++i) {
+    Vec<Dim> x;
+    for (int d = 0; d < Dim; ++d) x[d] = cell.lo[d] + u(rng) * (cell.hi[d] - cell.lo[d]);
+    Eigen::Matrix<double, K, 1> f;
+    for (int k = 0; k < K; ++k) f[k] = 10.0 * (k + 1) + u(rng);
+    sys.add_sample(fr.xi(x), f, 1.0);
+    if (kept) kept->push_back({x, f});
+  }
+  sys.points = n;
+  return sys;
+}
+
+template <int Dim, int Degree>
+void check_moved_sums() {
+  constexpr int K = 3;
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    CellBox<Dim> to, from;
+    for (int d = 0; d < Dim; ++d) {
+      to.lo[d] = u(rng);
+      to.hi[d] = to.lo[d] + 0.5 + std::abs(u(rng));
+      from.lo[d] = u(rng) + 2.0;
+      from.hi[d] = from.lo[d] + 0.2 + std::abs(u(rng));  // a different size: a ≠ 1
+    }
+    const TaylorFrame<Dim> fto(to), ffrom(from);
+    const TaylorChange<Dim, Degree> change(ffrom, fto);
+    // ψ_to(x) = G ψ_from(x) at any point, inside either cell or not
+    for (int i = 0; i < 5; ++i) {
+      Vec<Dim> x;
+      for (int d = 0; d < Dim; ++d) x[d] = 3.0 * u(rng);
+      const auto psi_to = taylor_basis<Dim, Degree>(to, x);
+      const auto psi_from = taylor_basis<Dim, Degree>(from, x);
+      CHECK((psi_to - change.matrix() * psi_from).norm() <= 1e-13 * psi_to.norm());
+      CHECK((change.apply(psi_from) - change.matrix() * psi_from).norm() <= 1e-14 * psi_to.norm());
+    }
+    // moving the sums of `from` equals adding its samples one by one in the frame of `to`
+    std::vector<std::pair<Vec<Dim>, Eigen::Matrix<double, K, 1>>> samples;
+    auto own = random_sums<Dim, Degree, K>(to, 4, rng, nullptr);
+    const auto theirs = random_sums<Dim, Degree, K>(from, 7, rng, &samples);
+    auto direct = own;
+    for (const auto& [x, f] : samples) direct.add_sample(fto.xi(x), f, 1.0);
+    own.add_moved(theirs, change, 1.0);
+    CHECK(own.points == 11);
+    CHECK((own.D - direct.D).norm() <= 1e-12 * direct.D.norm());
+    CHECK((own.b - direct.b).norm() <= 1e-12 * direct.b.norm());
+  }
+  // a move along one axis only (Axes mask) equals the general move between frames that differ along it only
+  if constexpr (Dim == 2) {
+    const CellBox<2> to{Vec<2>(0.0, 0.0), Vec<2>(1.0, 1.0)}, right{Vec<2>(1.0, 0.0), Vec<2>(2.0, 1.0)},
+        above{Vec<2>(0.0, 1.0), Vec<2>(1.0, 2.0)};
+    const TaylorFrame<2> f0(to), fr(right), fa(above);
+    const auto sys_r = random_sums<2, Degree, K>(right, 5, rng, nullptr);
+    const auto sys_a = random_sums<2, Degree, K>(above, 5, rng, nullptr);
+    auto general = random_sums<2, Degree, K>(to, 3, rng, nullptr);
+    auto masked = general;
+    general.add_moved(sys_r, TaylorChange<2, Degree>(fr, f0), 1.0);
+    general.add_moved(sys_a, TaylorChange<2, Degree>(fa, f0), 1.0);
+    masked.add_moved(sys_r, TaylorChange<2, Degree, 1u>(fr, f0), 1.0);
+    masked.add_moved(sys_a, TaylorChange<2, Degree, 2u>(fa, f0), 1.0);
+    CHECK((general.D - masked.D).norm() <= 1e-14 * general.D.norm());
+    CHECK((general.b - masked.b).norm() <= 1e-14 * general.b.norm());
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Taylor frame change: psi_to = G psi_from - moved normal sums equal the samples added directly",
+          "[reconstruction][tls]") {
+  SECTION("1D degree 1") { check_moved_sums<1, 1>(); }
+  SECTION("1D degree 2") { check_moved_sums<1, 2>(); }
+  SECTION("2D degree 1") { check_moved_sums<2, 1>(); }
+  SECTION("2D degree 2") { check_moved_sums<2, 2>(); }
+}
+
+TEST_CASE("Rank-revealing solve: equals a dense LU on full-rank systems - refuses rank-deficient ones",
+          "[reconstruction]") {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int trial = 0; trial < 200; ++trial) {
+    Eigen::Matrix<double, 6, 9> B;  // 9 samples of 6 functions, badly scaled columns
+    for (int i = 0; i < 6; ++i)
+      for (int j = 0; j < 9; ++j) B(i, j) = u(rng) * std::pow(10.0, i - 3);
+    const Eigen::Matrix<double, 6, 6> D = B * B.transpose();
+    Eigen::Matrix<double, 6, 2> r;
+    for (int i = 0; i < r.size(); ++i) r.data()[i] = u(rng);
+    Eigen::Matrix<double, 6, 2> x;
+    REQUIRE(detail::solve_full_rank<6, 2>(D, r, 1e-10, x));
+    const Eigen::Matrix<double, 6, 2> reference = D.fullPivLu().solve(r);
+    CHECK((x - reference).norm() <= 1e-9 * reference.norm());
+    CHECK((D * x - r).norm() <= 1e-9 * r.norm());
+    // rank 4: two functions that are combinations of the others
+    Eigen::Matrix<double, 6, 9> C = B;
+    C.row(4) = 2.0 * C.row(0) - C.row(1);
+    C.row(5) = C.row(2) + 3.0 * C.row(3);
+    const Eigen::Matrix<double, 6, 6> S = C * C.transpose();
+    const Eigen::Matrix<double, 6, 2> untouched = x;
+    CHECK_FALSE(detail::solve_full_rank<6, 2>(S, r, 1e-10, x));
+    CHECK(x == untouched);
+  }
+}
+
+// ================================================================================================================
 TEST_CASE("TLS 2D - thesis §6.2.1: sin(x1)cos(x2) on (0 5)^2 - 6 points and 6 functions per cell",
           "[reconstruction][tls][verification]") {
   double err2 = 0.0, integral = 0.0, exact = 0.0;
