@@ -25,7 +25,7 @@
 
 namespace {
 
-constexpr long kPeriod = 16;              // engine/simulation.cpp: reorder_every
+constexpr long kPeriod = 16;              // engine/simulation_impl.hpp: reorder_every
 constexpr std::size_t kLarge = 5'000'000;  // from here: one period per run, one repetition, no warm-up
 
 /// The headline scene; `n` nominal particles, 4 per cell.

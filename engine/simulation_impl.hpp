@@ -1,3 +1,8 @@
+#pragma once
+// The definitions of Simulation<Dim>, included by simulation_1d.cpp and simulation_2d.cpp, which instantiate one
+// dimension each: every combination of basis, material and body force instantiates the step kernels, and in one
+// translation unit both dimensions took 3 min to compile (10 GB of memory under AddressSanitizer); split, the two
+// compile in parallel. Not a public header.
 #include "engine/simulation.hpp"
 
 #include <algorithm>
@@ -789,10 +794,5 @@ Energy Simulation<Dim>::energy() const {
       material_);
   return e;
 }
-
-template class Simulation<1>;
-template class Simulation<2>;
-template AnyBasis<1> make_basis<1>(const GridSpec&);
-template AnyBasis<2> make_basis<2>(const GridSpec&);
 
 }  // namespace mpm
