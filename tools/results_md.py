@@ -323,13 +323,14 @@ on this very setting: `tests/test_reference_1d.cpp`, "ULFEM - large-deformation 
 Column compaction (thesis Table 5.6, exact solution of docs/COLUMN_COMPACTION.md). The thesis: BSMPM reduces the
 MPM error by a factor of 10; CS slightly below TLS.
 
-TLS on the column does not converge like direct BSMPM or CS: its stress error stalls or grows with refinement
-(4 particles per cell: σ RMS 51 → 26 → 7.6e3 Pa on 10 → 20 → 40 cells, unstable on 80; 20 per cell: 41 → 13 →
-6.2 → 6.2 Pa on 10 → 80 cells; `tests/test_verification.cpp` documents the 4-per-cell case). The error is an
-oscillation in the column's interior that appears once particles cross cell boundaries, not at the partly
-filled top cell (TLS cells are clipped to the body there) and not a time-step effect (dt/4: same). Cell-wise
-TLS pins each particle's mass to the cell it is in, so every crossing moves 1/ppc of a cell's mass by a cell at
-once; fitting ρb with the mass (constrained to Σ m_p b_p) was tried and did not help.
+TLS on the column, with the thesis' 20 particles per cell, converges like direct BSMPM: σ RMS 40.7 → 12.1 → 4.42 →
+1.46 Pa on 10 → 20 → 40 → 80 cells (MUSL, dt = 1e-4 s; least-squares order 1.59; direct BSMPM 35.7 → 12.1 → 3.96 →
+1.75 Pa; dt/4 changes the 40- and 80-cell errors by < 1 %), checked by `tests/test_verification.cpp`. Before the
+reconstruction changes of docs/RECONSTRUCTION.md (momentum as ρ̂v̂, conditioning-tested neighbour completion, the
+limiter) it stalled at 6.2 Pa from 40 cells on. With 4 particles per cell MUSL-TLS still stops on the energy guard
+at 40 and 80 cells (exit 3, energy gain > 15 %) where USL-TLS converges (50 → 25 → 12 → 2.9 Pa): MUSL's second
+projection, of the updated velocities through the reconstruction, gains energy when cells hold few particles
+(see also the falling block in docs/STABILITY.md).
 
 {rel_l2_table(column)}
 
