@@ -586,7 +586,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_cubic_spline(const ParticleView<Di
     if (mass_spline_.size() < 2) ++fallbacks_.constant;
     // The body's current extent: the end particles' domains, x_p ∓ V_p/2, reach the body's ends, and the
     // spline is extrapolated there (thesis Fig. 3.3); outside it no Gauss point carries anything.
-    const auto [lo, hi] = body_extent_1d(p, sorted_.size());
+    const Extent1d extent = body_extent_1d(p, sorted_.size());
+    const double lo = extent.lo, hi = extent.hi;  // (clang 14 cannot capture structured bindings)
     const int n = static_cast<int>(half_rule_.x.size());
     tbb::parallel_for(std::size_t(0), static_cast<std::size_t>(cells_[0]), [&](std::size_t c) {
       for (int half = 0; half < 2; ++half) {

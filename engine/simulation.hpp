@@ -122,9 +122,8 @@ class Simulation {
   /// CG iterations of the consistent-mass solves in the last step (0 for lumped mass).
   int last_cg_iterations() const { return cg_iterations_; }
 
+  /// A copy of the state (step, time, conservation, every particle column).
   SimulationState save_state() const;
-  /// The same into an existing state, reusing its memory: a periodic backup then never holds two copies at once.
-  void save_state(SimulationState& into) const;
   /// Restores a state of this scene; throws std::invalid_argument if its columns do not match this run's.
   void load_state(const SimulationState& state);
 

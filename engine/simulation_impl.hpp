@@ -338,21 +338,15 @@ Simulation<Dim>::~Simulation() = default;
 template <int Dim>
 SimulationState Simulation<Dim>::save_state() const {
   SimulationState st;
-  save_state(st);
-  return st;
-}
-
-template <int Dim>
-void Simulation<Dim>::save_state(SimulationState& st) const {
   st.step = step_;
   st.time = time_;
   st.conservation = conservation_;
   st.names = store_.column_names();
-  st.columns.resize(st.names.size());
-  for (std::size_t k = 0; k < st.names.size(); ++k) {
-    const auto c = store_.column(st.names[k]);
-    st.columns[k].assign(c.begin(), c.end());  // reuses the vector's memory when the size is unchanged
+  for (const auto& name : st.names) {
+    const auto c = store_.column(name);
+    st.columns.emplace_back(c.begin(), c.end());
   }
+  return st;
 }
 
 template <int Dim>

@@ -205,7 +205,7 @@ RunErrors run_column(int cells, const std::string& mapping, int per_cell, Conser
 
 TEST_CASE("column compaction (thesis 5.4.2, Table 5.7) - BSMPM-TLS with the thesis' 20 particles per cell: "
           "conservative at every resolution - stress error order >= 1.5 over 10 -> 80 cells",
-          "[verification][column][tls]") {
+          "[verification][column][tls][long]") {
   // Measured (MUSL, dt = 1e-4 s): sigma RMS 40.7 -> 12.1 -> 4.42 -> 1.46 Pa (orders 1.75, 1.45, 1.60; least-squares
   // 1.59), u 1.23e-3 -> 3.05e-4 -> 8.59e-5 -> 2.17e-5 m; direct BSMPM 35.7 -> 12.1 -> 3.96 -> 1.75 Pa. dt / 4
   // changes the 40- and 80-cell errors by < 1 %: this is the spatial error. With 4 particles per cell MUSL-TLS
@@ -251,7 +251,7 @@ RunErrors run_traction_bar(int cells, const std::string& mapping, Conservation* 
 
 TEST_CASE("bar with a traction at its free end (thesis 4.6.2, Fig 4.9) - BSMPM direct and TLS: errors decrease at a "
           "measured order, 20 -> 40 -> 80 cells",
-          "[verification][traction]") {
+          "[verification][traction][long]") {
   // Measured: u orders 1.66, 1.68 (direct) and 1.63, 1.53 (TLS); sigma 1.01, 1.44 and 1.04, 1.19. The stress has
   // a kink at the wave front (eq. 4.93), which bounds the orders (thesis: "slightly lower than expected").
   for (const char* mapping : {"direct", "tls"}) {
