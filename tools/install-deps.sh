@@ -8,7 +8,7 @@ packages=(
   libeigen3-dev libtbb-dev libhdf5-dev
   catch2 libbenchmark-dev nlohmann-json3-dev libcli11-dev
   python3 python3-matplotlib python3-h5py python3-numpy
-  clang-14 libclang-rt-14-dev llvm-14  # tools/sanitize.sh: libFuzzer (clang only) and llvm-symbolizer for reports
+  clang-14 libclang-rt-14-dev llvm-14  # tools/sanitize.sh: the sanitizer builds, libFuzzer (clang only), llvm-symbolizer
 )
 
 missing=()

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
-# Sanitizer and fuzzing runs (CI runs `fuzz` after the test suite; `asan` and `tsan` are run by hand, see .ci/run).
+# Sanitizer and fuzzing runs (CI runs all three after the test suite, see .ci/run).
 #
-#   tools/sanitize.sh asan          build-asan/: -fsanitize=address,undefined (g++, -O1 -g1), the CTest suite without
-#                                   the long numerical studies (Catch2 tag [long]) and the install-and-consume test;
-#                                   any ASan/UBSan/LSan report fails the test
-#   tools/sanitize.sh tsan          build-tsan/: -fsanitize=thread, the multithreaded tests only (Catch2 tag [parallel])
+#   tools/sanitize.sh asan          build-asan/: -fsanitize=address,undefined (clang++, -O1 -g1), the CTest suite
+#                                   without the long numerical studies (Catch2 tag [long]), the install-and-consume
+#                                   and the kill-and-resume tests; any ASan/UBSan/LSan report fails the test
+#   tools/sanitize.sh tsan          build-tsan/: -fsanitize=thread (clang++, oneTBB built alike), the multithreaded
+#                                   tests only (Catch2 tag [parallel])
 #   tools/sanitize.sh fuzz [SECS]   build-fuzz/: clang++ libFuzzer + ASan + UBSan on the scene parser
 #                                   (tests/fuzz/), both targets side by side for SECS seconds each (default 60)
 #   tools/sanitize.sh all [SECS]    asan, tsan, then fuzz SECS (default 60); runs every mode, fails if any failed
@@ -15,7 +16,7 @@ set -uo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 jobs=$(nproc)
 
-usage() { sed -n '2,12p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 1; }
+usage() { sed -n '2,14p' "$0" | sed 's/^# \{0,1\}//' >&2; exit 1; }
 
 log() { echo "sanitize: $*" >&2; }
 
@@ -78,9 +79,9 @@ run_asan() {
 # source package of the installed libtbb-dev (same version), with -fsanitize=thread, into build-tsan/tbb/ (once;
 # ~1 min). apt-get runs with private lists and cache under that directory: the system's apt configuration is not
 # touched.
-build_tsan_tbb() {
+build_tsan_tbb() {  # with $clang / $clangxx: TBB and the tests must use the same TSan runtime
   local dir="$root/build-tsan/tbb"
-  local prefix="$dir/prefix"
+  local prefix="$dir/prefix-$clangxx"
   if [ -f "$prefix/lib/cmake/TBB/TBBConfig.cmake" ]; then echo "$prefix"; return 0; fi
   local pkg version
   pkg=$(dpkg-query -W -f='${source:Package}' libtbb-dev) && version=$(dpkg-query -W -f='${source:Version}' libtbb-dev) ||
@@ -96,6 +97,7 @@ build_tsan_tbb() {
   tar -xf "$dir"/src/*.orig.tar.* -C "$dir/src" || return 1
   local src; src=$(find "$dir/src" -mindepth 2 -maxdepth 2 -name CMakeLists.txt -printf '%h\n' | head -1)
   cmake -S "$src" -B "$dir/build" -DCMAKE_BUILD_TYPE=RelWithDebInfo -DTBB_SANITIZE=thread -DTBB_TEST=OFF \
+    -DCMAKE_C_COMPILER="$clang" -DCMAKE_CXX_COMPILER="$clangxx" \
     -DTBB_STRICT=OFF -DTBBMALLOC_BUILD=OFF -DTBB_DISABLE_HWLOC_AUTOMATIC_SEARCH=ON -DCMAKE_INSTALL_PREFIX="$prefix" \
     >"$dir/configure.log" 2>&1 || { cat "$dir/configure.log" >&2; return 1; }
   cmake --build "$dir/build" -j"$jobs" >"$dir/build.log" 2>&1 || { tail -30 "$dir/build.log" >&2; return 1; }
@@ -105,9 +107,12 @@ build_tsan_tbb() {
 
 run_tsan() {
   local tbb
+  pick_clang  # clang, as for asan: the instrumented build takes a fraction of g++'s time and memory
   tbb=$(build_tsan_tbb) || { log "tsan: could not build an instrumented oneTBB"; return 1; }
+  reset_cache_unless build-tsan "$clangxx"
   configure_and_build build-tsan mpm_tests -- \
     -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1" -DMPM_SANITIZE=thread \
+    -DCMAKE_C_COMPILER="$clang" -DCMAKE_CXX_COMPILER="$clangxx" \
     -DTBB_DIR="$tbb/lib/cmake/TBB" "-DMPM_TEST_SPEC=[parallel]" || return 1
   if ! ldd "$root/build-tsan/tests/mpm_tests" | grep -q "$tbb/lib/libtbb"; then
     log "tsan: mpm_tests does not load the instrumented libtbb from $tbb"; return 1
