@@ -272,7 +272,11 @@ Commands:
 {cmds(plate_cmds)}
 
 The paper (its Figs 2–4, no table): direct MPM does not converge at A = 0.1; BSMPM converges about second order on
-coarse grids and then stalls; BSMPM-MLS keeps converging to 64×64.
+coarse grids and then stalls; BSMPM-MLS keeps converging to 64×64. Here (table above): MPM and BSMPM behave as the
+paper says; BSMPM-MLS converges from 16 to 64 cells, but on 8 cells its printed ±3h support loses most of the mass
+at P2G (`mass_rel_max` in results/plate-mls/study.csv) and the energy guard stops the run (status `unstable`, the
+last good state saved); BSMPM-TLS, which the paper does not have, conserves mass and momentum to round-off and is
+the most accurate method from 32 cells on, still converging at 64 (docs/RECONSTRUCTION.md).
 
 ## 2. Vibrating bar without grid crossing — thesis Fig 5.9
 
