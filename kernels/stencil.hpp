@@ -15,6 +15,10 @@
 #include "kernels/bspline.hpp"
 
 #define MPM_INLINE [[gnu::always_inline]] inline
+// The same for the row lambdas the kernels pass to for_each_row: without it, one more level of calls (scatter_p2g →
+// scatter_rows → for_each_row → lambda) was enough for GCC to leave the lambda and the SIMD operators in it out of
+// line — 1747 instead of 1253 instructions per 2D USL particle-step (callgrind).
+#define MPM_INLINE_LAMBDA __attribute__((always_inline))
 
 namespace mpm {
 
@@ -95,7 +99,7 @@ MPM_INLINE void for_each_row(const Stencil<Dim, S>& st, int stride, F&& f) {
 /// Calls f(dof, weight, gradient) for every node of the stencil (no padding), in a fixed order (axis 0 fastest).
 template <int Dim, int S, class F>
 MPM_INLINE void for_each_node(const Stencil<Dim, S>& st, int stride, F&& f) {
-  for_each_row(st, stride, [&](int row, double wy, double dwy) {
+  for_each_row(st, stride, [&](int row, double wy, double dwy) MPM_INLINE_LAMBDA {
     for (int i = 0; i < S; ++i) {
       if constexpr (Dim == 1) f(row + i, st.wx[i], std::array<double, 1>{st.dwx[i]});
       else f(row + i, st.wx[i] * wy, std::array<double, 2>{st.dwx[i] * wy, st.wx[i] * dwy});

@@ -95,7 +95,7 @@ inline MomentumTotals<Dim> sum_totals(const std::vector<MomentumTotals<Dim>>& pa
 template <ScatterFields Fields, int Dim, int S>
 MPM_INLINE void scatter_rows(const Stencil<Dim, S>& st, const GridView<Dim>& g, double m, const double (&mv)[Dim],
                              const double (&Vsig)[Dim][Dim], const double (&mb)[Dim]) {
-  for_each_row(st, g.stride1, [&](int row, double wy, double dwy) {
+  for_each_row(st, g.stride1, [&](int row, double wy, double dwy) MPM_INLINE_LAMBDA {
     const RowVector<S> w = st.wx * wy;
     const RowVector<S> dw[2] = {st.dwx * wy, st.wx * dwy};  // ∇φ (the second only in 2D)
     if constexpr (Fields.mass) add_to_row(g.m + row, w * m);
@@ -163,7 +163,7 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
     for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
     const auto st = stencil_at<Dim, S>(basis, xp);
     RowVector<S> ap[Dim] = {};
-    for_each_row(st, g.stride1, [&](int row, double wy, double) {
+    for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
       for (int d = 0; d < Dim; ++d) ap[d] += st.wx * wy * load_row<RowVector<S>>(g.a[d] + row);
     });
     const double mp = p.m[ip];
@@ -174,7 +174,7 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
       mv[d] = mp * vp[d];
     }
     totals.add(mp, vp);
-    for_each_row(st, g.stride1, [&](int row, double wy, double) {
+    for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
       for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, st.wx * wy * mv[d]);
     });
   }
@@ -191,7 +191,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleVi
     const auto st = stencil_at<Dim, S>(basis, xp);
     // sums over the stencil per lane, reduced at the end: ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
     RowVector<S> ap[Dim] = {}, vp[Dim] = {}, grad_v[Dim * Dim] = {};
-    for_each_row(st, g.stride1, [&](int row, double wy, double dwy) {
+    for_each_row(st, g.stride1, [&](int row, double wy, double dwy) MPM_INLINE_LAMBDA {
       const RowVector<S> w = st.wx * wy;
       const RowVector<S> dw[2] = {st.dwx * wy, st.wx * dwy};
       for (int d = 0; d < Dim; ++d) {
@@ -244,12 +244,12 @@ inline void apply_consistent_mass(const TensorBasis<Dim, Axis>& basis, const Par
     for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
     const auto st = stencil_at<Dim, S>(basis, xp);
     RowVector<S> xp_lanes[Dim] = {};
-    for_each_row(st, stride1, [&](int row, double wy, double) {
+    for_each_row(st, stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
       for (int d = 0; d < Dim; ++d) xp_lanes[d] += st.wx * wy * load_row<RowVector<S>>(x[d] + row);
     });
     double mx[Dim];  // m_p Σ_j φ_j x_j
     for (int d = 0; d < Dim; ++d) mx[d] = p.m[ip] * reduce(xp_lanes[d]);
-    for_each_row(st, stride1, [&](int row, double wy, double) {
+    for_each_row(st, stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
       for (int d = 0; d < Dim; ++d) add_to_row(y[d] + row, st.wx * wy * mx[d]);
     });
   }
