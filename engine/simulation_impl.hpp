@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -743,10 +744,31 @@ std::array<const double*, Dim> Simulation<Dim>::reference_columns() const {
 
 template <int Dim>
 double Simulation<Dim>::external_power() const {
-  if (!problem_->has_body_force()) return 0.0;
+  // Point loads (the traction bar): force · velocity of the particle nearest the load point. Without this term the
+  // energy guard saw the traction's work as an energy gain and stopped every traction run at its first sample.
+  double loads_power = 0.0;
+  if (problem_->has_point_loads()) {
+    const std::size_t n = store_.size();
+    // point_loads only reads the particles; view() is the store's one accessor for them
+    const ParticleView<Dim> pv = const_cast<ParticleStore<Dim>&>(store_).view();
+    for (const auto& load : problem_->point_loads(time_, pv, n)) {
+      std::size_t nearest = 0;
+      double best = std::numeric_limits<double>::infinity();
+      for (std::size_t p = 0; p < n; ++p) {
+        double d2 = 0.0;
+        for (int d = 0; d < Dim; ++d) d2 += (pv.x[d][p] - load.x[d]) * (pv.x[d][p] - load.x[d]);
+        if (d2 < best) {
+          best = d2;
+          nearest = p;
+        }
+      }
+      for (int d = 0; d < Dim; ++d) loads_power += n > 0 ? load.force[d] * pv.v[d][nearest] : 0.0;
+    }
+  }
+  if (!problem_->has_body_force()) return loads_power;
   const auto& s = store_;
   const auto m = s.column(Field::mass);
-  return std::visit(
+  return loads_power + std::visit(
       [&](const auto& force) {
         if constexpr (!std::decay_t<decltype(force)>::active) {
           return 0.0;
