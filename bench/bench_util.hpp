@@ -80,7 +80,7 @@ struct ParticleSet2D {
       : cells(cells_),
         n(static_cast<std::size_t>(4) * cells_ * cells_),
         store(n, fields()),
-        bins({cells_, cells_}, {1.0, 1.0}, 4),  // the engine's block width for quadratic splines
+        bins({cells_, cells_}, {1.0, 1.0}, mpm::CellBins<2>::block_width_for(4, 1)),  // the engine's, quadratic
         basis{{mpm::UniformAxis<3>(cells_, 1.0), mpm::UniformAxis<3>(cells_, 1.0)}, {cells_ + 2, cells_ + 2}} {
     using mpm::Field;
     std::mt19937_64 rng(42);

@@ -1,10 +1,10 @@
 #pragma once
 // Particles binned by block of cells, blocks split into 2^Dim colour classes, for the lock-free scatter:
-// two blocks of one colour are separated by a block of another colour along every axis, and a block is at least
-// as wide as the stencil reaches beyond a cell (with the kernels' padding lane, stencil.hpp), so blocks of one
-// colour never write the same DOF. One
-// tbb::parallel_for per colour needs no atomics, and since the order of the sums into each DOF is fixed by the
-// (stable) sort and the colour sequence, the result is bitwise identical for any thread count.
+// two blocks of one colour are separated by a block of another colour along every axis, and a block is wide
+// enough (block_width_for) that blocks of one colour never write the same DOF, even after their particles have
+// moved a little since they were binned. One tbb::parallel_for per colour needs no atomics, and since the order
+// of the sums into each DOF is fixed by the (stable) sort and the colour sequence, the result is bitwise
+// identical for any thread count.
 #include <array>
 #include <cstddef>
 #include <span>
@@ -20,7 +20,14 @@ namespace mpm {
 template <int Dim>
 class CellBins {
  public:
-  /// `block_width` cells per block and axis; it must be ≥ the basis degree (see the class comment).
+  /// The narrowest block width for which blocks of one colour never write the same DOF while every particle is
+  /// less than `slack` cells (per axis) away from where it was binned. A particle of cell c writes functions
+  /// c … c + reach − 1 (`reach`: the stencil width with the kernels' padding lanes, stencil.hpp); binned into block
+  /// [0, W) it is in a cell of [−slack, W − 1 + slack], the next block of its colour starts at 2W, so the two stay
+  /// apart when W − 1 + slack + reach − 1 < 2W − slack.
+  static constexpr int block_width_for(int reach, int slack) { return reach + 2 * slack - 1; }
+
+  /// `block_width` cells per block and axis (block_width_for).
   CellBins(std::array<int, Dim> cells, std::array<double, Dim> length, int block_width);
 
   /// Stable counting sort of the particles by block, colour-major. Positions outside the grid are binned into

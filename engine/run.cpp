@@ -29,7 +29,9 @@ using Clock = std::chrono::steady_clock;
 
 double seconds_since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-constexpr long backup_every = 64;  // steps between backups used to recover the last good state (StateBackup)
+// steps between backups used to recover the last good state (StateBackup); a multiple of the engine's reorder
+// period (16), so a backup falls on a step that bins afresh and the replay from it repeats the run bit for bit
+constexpr long backup_every = 64;
 
 /// Steps between samples of the energy-balance guard: about 200 per run (as the metrics), at most backup_every,
 /// and a power of two so that every backup falls on a sample (the last good state is then a sample that passed).
@@ -273,6 +275,7 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
   StopOnSignals signals;
   double stepping_s = 0.0;
   long steps_timed = 0;
+  bool checkpoint_due = false;
   try {
     while (!sim.finished()) {
       if (sim.steps_done() % backup_every == 0) backup.save(sim);
@@ -296,10 +299,16 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
         if (metrics_now) record_metrics(e);
       }
       if (s % snapshot_every == 0 || sim.finished()) snapshot();
-      if (out && checkpoint_every > 0 && s % checkpoint_every == 0 && !sim.finished())
+      // checkpoints (periodic, or on a signal) wait for the next step that bins the particles afresh, at most
+      // reorder-period − 1 steps: a run resumed from any other step would bin them differently and end up
+      // different in the last bits (Simulation::next_step_bins)
+      checkpoint_due = checkpoint_due || (out && checkpoint_every > 0 && s % checkpoint_every == 0);
+      if (checkpoint_due && sim.next_step_bins() && !sim.finished()) {
         write_checkpoint(*out, sim, balance, drift_max);
+        checkpoint_due = false;
+      }
       progress.update(s, total, sim.time());
-      if (const int sig = stop_signal.load(); sig != 0 && !sim.finished()) {
+      if (const int sig = stop_signal.load(); sig != 0 && !sim.finished() && sim.next_step_bins()) {
         result.status = exit_failure;
         result.message = "stopped by signal " + std::to_string(sig) + " at step " + std::to_string(s);
         if (out) {

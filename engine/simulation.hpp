@@ -4,6 +4,7 @@
 // stages and particle columns it needs.
 #include <array>
 #include <cstddef>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -96,6 +97,9 @@ class Simulation {
   void step();
 
   bool finished() const { return step_ >= steps_total_; }
+  /// Whether the next step bins the particles afresh. Between binnings the blocks a particle scatters in depend on
+  /// where it was at the last binning, so only a state saved here resumes bitwise like the uninterrupted run.
+  bool next_step_bins() const;
   long steps_done() const { return step_; }
   long steps_total() const { return steps_total_; }
   double time() const { return time_; }
@@ -128,8 +132,9 @@ class Simulation {
   void load_state(const SimulationState& state);
 
  private:
+  /// Returns the largest distance a particle moved along an axis, in cells.
   template <class B, class M, class F>
-  void step_with(const B& basis, const M& material, const F& body, double dt);
+  double step_with(const B& basis, const M& material, const F& body, double dt);
   template <class B>
   void solve_consistent(const B& basis, const ParticleView<Dim>& carriers, const CellBins<Dim>& bins,
                         std::array<std::vector<double>, Dim>& x, const std::array<std::vector<double>, Dim>& rhs);
@@ -153,11 +158,12 @@ class Simulation {
   double empty_mass_ = 0.0;  ///< nodal mass at or below which a DOF counts as empty
   double dt_ = 0.0, time_ = 0.0;
   long step_ = 0, steps_total_ = 0;
+  double moved_cells_ = std::numeric_limits<double>::infinity();  ///< bound on any particle's move since binning
   int cg_iterations_ = 0;
   std::array<std::vector<double>, Dim> cg_r_, cg_z_, cg_p_, cg_Ap_, cg_x_;
   std::vector<MomentumTotals<Dim>> block_momentum_;
   std::optional<GaussPoints<Dim>> gauss_;      ///< reconstructed mappings only
-  std::optional<CellBins<Dim>> particle_cells_;  ///< particles by single cell, for the per-cell fits  ///< particle momentum per block, from the last momentum scatter
+  std::optional<CellBins<Dim>> particle_cells_;  ///< particles by single cell, for the per-cell fits
 };
 
 extern template class Simulation<1>;

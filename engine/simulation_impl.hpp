@@ -25,6 +25,9 @@ namespace {
 
 constexpr std::size_t particle_grain = 2048;  // particles per task of the gather loops
 constexpr int reorder_every = 16;              // steps between permutations of the particles into block order
+// The particles are binned again once they may have moved this many cells since the last binning (or at a
+// reordering); the blocks are wide enough for that (CellBins::block_width_for). Binning was 8–11 % of a step.
+constexpr int bin_slack_cells = 1;
 constexpr double cg_tolerance = 1e-14;         // relative residual of the consistent-mass solves
 constexpr int cg_max_iterations = 1000;
 
@@ -231,7 +234,8 @@ Simulation<Dim>::Simulation(const Scene& scene)
           c[d] = scene.grid.cells[d];
           l[d] = scene.grid.length[d];
         }
-        return CellBins<Dim>(c, l, std::max(2, degree_of(scene.grid.basis)) * 2);
+        const int width = degree_of(scene.grid.basis) + 1;
+        return CellBins<Dim>(c, l, CellBins<Dim>::block_width_for(width + width % 2, bin_slack_cells));
       }()) {
   if (scene.dimension != Dim) throw std::logic_error("Simulation: scene dimension does not match");
 
@@ -368,22 +372,32 @@ void Simulation<Dim>::load_state(const SimulationState& st) {
   step_ = st.step;
   time_ = st.time;
   conservation_ = st.conservation;
+  moved_cells_ = std::numeric_limits<double>::infinity();  // the particles moved: bin them before the next scatter
+}
+
+template <int Dim>
+bool Simulation<Dim>::next_step_bins() const {
+  return step_ % reorder_every == 0 || moved_cells_ >= bin_slack_cells;
 }
 
 template <int Dim>
 void Simulation<Dim>::step() {
   const double dt = step_ + 1 == steps_total_ ? scene_.time.end - dt_ * step_ : dt_;
   // bin first: the periodic reordering moves the columns, so every pointer into them is taken after it
-  std::array<const double*, Dim> x;
-  for (int d = 0; d < Dim; ++d) x[d] = store_.column(Field::position, d).data();
-  bins_.bin(x, store_.size());
-  if (step_ % reorder_every == 0) {
+  const bool reorder = step_ % reorder_every == 0;
+  if (next_step_bins()) {
+    std::array<const double*, Dim> x;
+    for (int d = 0; d < Dim; ++d) x[d] = store_.column(Field::position, d).data();
+    bins_.bin(x, store_.size());
+    moved_cells_ = 0.0;
+  }
+  if (reorder) {
     store_.permute(bins_.order());
     bins_.adopt_order();
   }
   const BodyForce<Dim> body = problem_->body_force(time_, reference_columns());
   std::visit([&](const auto& basis, const auto& material,
-                 const auto& force) { step_with(basis, material, force, dt); },
+                 const auto& force) { moved_cells_ += step_with(basis, material, force, dt); },
              basis_, material_, body);
   ++step_;
   time_ = step_ == steps_total_ ? scene_.time.end : dt_ * step_;
@@ -523,7 +537,7 @@ void Simulation<Dim>::solve_consistent(const B& basis, const ParticleView<Dim>& 
 
 template <int Dim>
 template <class B, class M, class F>
-void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body, double dt) {
+double Simulation<Dim>::step_with(const B& basis, const M& material, const F& body, double dt) {
   constexpr int S = B::width;
   const std::size_t np = store_.size();
   cg_iterations_ = 0;
@@ -532,7 +546,10 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
   const unsigned* order = bins_.order().data();
   const auto stress = [&](const double* Fp, double* s) { material.template stress<Dim>(Fp, s); };
   ParticleGuard guard;
-  for (int d = 0; d < Dim; ++d) guard.hi[d] = scene_.grid.length[d];
+  for (int d = 0; d < Dim; ++d) {
+    guard.hi[d] = scene_.grid.length[d];
+    guard.inv_h[d] = scene_.grid.cells[d] / scene_.grid.length[d];
+  }
 
   block_momentum_.assign(bins_.blocks(), MomentumTotals<Dim>{});
   // P2G, direct (particles as integration points) or from the Gauss points of the reconstruction, which is
@@ -656,6 +673,7 @@ void Simulation<Dim>::step_with(const B& basis, const M& material, const F& body
       gather.template operator()<GatherFields{true, true, false}>("g2p-velocity-position");
       break;
   }
+  return guard.max_move_cells.load();
 }
 
 template <int Dim>

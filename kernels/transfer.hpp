@@ -3,6 +3,7 @@
 // Each kernel works on a range of particles; the caller decides the parallel schedule (coloured blocks for the
 // scatter, plain ranges for the gather). Compile-time flags select which sums a pass computes, so a scheme's
 // passes are the paper's steps and nothing more.
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstddef>
@@ -185,6 +186,7 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
 template <GatherFields Fields, int Dim, int S, class Axis, class Stress>
 MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p, const GridView<Dim>& g,
                        std::size_t begin, std::size_t end, double dt, const Stress& stress, ParticleGuard& guard) {
+  double max_move = 0.0;  // cells
   for (std::size_t ip = begin; ip < end; ++ip) {
     double xp[Dim];
     for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
@@ -207,7 +209,11 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleVi
     if constexpr (Fields.velocity)
       for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * reduce(ap[d]);
     if constexpr (Fields.position)
-      for (int d = 0; d < Dim; ++d) p.x[d][ip] += dt * reduce(vp[d]);
+      for (int d = 0; d < Dim; ++d) {
+        const double dx = dt * reduce(vp[d]);
+        p.x[d][ip] += dx;
+        max_move = std::max(max_move, std::abs(dx) * guard.inv_h[d]);
+      }
     if constexpr (Fields.deformation) {
       double F[Dim * Dim], Fn[Dim * Dim];
       for (int c = 0; c < Dim * Dim; ++c) F[c] = p.F[c][ip];
@@ -230,6 +236,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleVi
       for (int d = 0; d < Dim; ++d)
         if (!(p.x[d][ip] >= 0.0 && p.x[d][ip] <= guard.hi[d]) || !std::isfinite(p.v[d][ip])) guard.flag(ip);
   }
+  if constexpr (Fields.position) guard.moved(max_move);
 }
 
 /// y += M x for particles order[begin..end), with the consistent mass M_ij = Σ_p φ_i m_p φ_j (eq. 2.31), applied

@@ -41,15 +41,25 @@ struct GridView {
   std::array<double*, Dim> a{};        ///< acceleration
 };
 
-/// Records the first particle (lowest index) whose state became invalid inside a kernel: non-finite values,
-/// J ≤ 0, or a position outside the grid. Flagging is rare, so a compare-and-swap loop costs nothing in practice.
+/// What the gathers report about the particles they moved: the first particle (lowest index) whose state became
+/// invalid — non-finite values, J ≤ 0, or a position outside the grid — and the largest move along an axis, in
+/// cells (when to bin the particles again). Both are order-independent (a minimum, a maximum), so they do not
+/// depend on the thread count; flagging is rare and the maximum is merged once per range, so the compare-and-swap
+/// loops cost nothing in practice.
 struct ParticleGuard {
   static constexpr std::size_t none = std::numeric_limits<std::size_t>::max();
-  std::array<double, 3> hi{};  ///< the grid is [0, hi] per axis
+  std::array<double, 3> hi{};     ///< the grid is [0, hi] per axis
+  std::array<double, 3> inv_h{};  ///< cells per unit length, per axis
   std::atomic<std::size_t> first_bad{none};
+  std::atomic<double> max_move_cells{0.0};
   void flag(std::size_t p) {
     std::size_t cur = first_bad.load(std::memory_order_relaxed);
     while (p < cur && !first_bad.compare_exchange_weak(cur, p, std::memory_order_relaxed)) {
+    }
+  }
+  void moved(double cells) {
+    double cur = max_move_cells.load(std::memory_order_relaxed);
+    while (cells > cur && !max_move_cells.compare_exchange_weak(cur, cells, std::memory_order_relaxed)) {
     }
   }
 };
