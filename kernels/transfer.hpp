@@ -96,17 +96,17 @@ inline MomentumTotals<Dim> sum_totals(const std::vector<MomentumTotals<Dim>>& pa
 template <ScatterFields Fields, int Dim, int S>
 MPM_INLINE void scatter_rows(const Stencil<Dim, S>& st, const GridView<Dim>& g, double m, const double (&mv)[Dim],
                              const double (&Vsig)[Dim][Dim], const double (&mb)[Dim]) {
+  // φ_i = wx_i wy and ∇φ_i = (dwx_i wy, wx_i dwy): every row is wx times a scalar, the force's plus dwx times
+  // another (f_id = φ_i mb_d − ∂₀φ_i Vσ_0d − ∂₁φ_i Vσ_1d), so the scalars are formed first, the rows last
   for_each_row(st, g.stride1, [&](int row, double wy, double dwy) MPM_INLINE_LAMBDA {
-    const RowVector<S> w = st.wx * wy;
-    const RowVector<S> dw[2] = {st.dwx * wy, st.wx * dwy};  // ∇φ (the second only in 2D)
-    if constexpr (Fields.mass) add_to_row(g.m + row, w * m);
+    if constexpr (Fields.mass) add_to_row(g.m + row, st.wx * (wy * m));
     if constexpr (Fields.momentum)
-      for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, w * mv[d]);
+      for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, st.wx * (wy * mv[d]));
     if constexpr (Fields.force)
       for (int d = 0; d < Dim; ++d) {
-        RowVector<S> fi = w * mb[d];
-        for (int l = 0; l < Dim; ++l) fi -= dw[l] * Vsig[l][d];
-        add_to_row(g.f[d] + row, fi);
+        double along_wx = wy * mb[d];
+        if constexpr (Dim == 2) along_wx -= dwy * Vsig[1][d];
+        add_to_row(g.f[d] + row, st.wx * along_wx - st.dwx * (wy * Vsig[0][d]));
       }
   });
 }
@@ -163,20 +163,20 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
     double xp[Dim];
     for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
     const auto st = stencil_at<Dim, S>(basis, xp);
-    RowVector<S> ap[Dim] = {};
+    RowVector<S> a_y[Dim] = {};  // Σ_j wy_j a_ij, then contracted with wx (as in gather_g2p)
     for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
-      for (int d = 0; d < Dim; ++d) ap[d] += st.wx * wy * load_row<RowVector<S>>(g.a[d] + row);
+      for (int d = 0; d < Dim; ++d) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
     });
     const double mp = p.m[ip];
     double vp[Dim], mv[Dim];
     for (int d = 0; d < Dim; ++d) {
-      vp[d] = p.v[d][ip] + dt * reduce(ap[d]);
+      vp[d] = p.v[d][ip] + dt * reduce(st.wx * a_y[d]);
       p.v[d][ip] = vp[d];
       mv[d] = mp * vp[d];
     }
     totals.add(mp, vp);
     for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
-      for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, st.wx * wy * mv[d]);
+      for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, st.wx * (wy * mv[d]));
     });
   }
   return totals;
@@ -184,41 +184,48 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
 
 /// G2P over particles [begin, end): the selected updates; `stress(F, s)` is the constitutive law (σ from F).
 template <GatherFields Fields, int Dim, int S, class Axis, class Stress>
-MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p, const GridView<Dim>& g,
-                       std::size_t begin, std::size_t end, double dt, const Stress& stress, ParticleGuard& guard) {
+MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& particles,
+                           const GridView<Dim>& grid, std::size_t begin, std::size_t end, double dt,
+                           const Stress& stress, ParticleGuard& guard) {
+  // local copies of the views and bounds: the constitutive law calls libm (log), and for all the compiler knows
+  // such a call may change the caller's objects, so it would reload every pointer after it
+  const ParticleView<Dim> p = particles;
+  const GridView<Dim> g = grid;
+  const std::array<double, 3> hi = guard.hi, inv_h = guard.inv_h;
   double max_move = 0.0;  // cells
   for (std::size_t ip = begin; ip < end; ++ip) {
     double xp[Dim];
     for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
     const auto st = stencil_at<Dim, S>(basis, xp);
-    // sums over the stencil per lane, reduced at the end: ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
-    RowVector<S> ap[Dim] = {}, vp[Dim] = {}, grad_v[Dim * Dim] = {};
+    // φ_i = wx_i wy_j: contract the rows along axis 1 first (a_y = Σ_j wy_j a_ij, and with dwy_j for ∂₁), then
+    // along axis 0 with wx or dwx; ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
+    RowVector<S> a_y[Dim] = {}, v_y[Dim] = {}, v_dy[Dim] = {};
     for_each_row(st, g.stride1, [&](int row, double wy, double dwy) MPM_INLINE_LAMBDA {
-      const RowVector<S> w = st.wx * wy;
-      const RowVector<S> dw[2] = {st.dwx * wy, st.wx * dwy};
       for (int d = 0; d < Dim; ++d) {
-        if constexpr (Fields.velocity) ap[d] += w * load_row<RowVector<S>>(g.a[d] + row);
+        if constexpr (Fields.velocity) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
         if constexpr (Fields.position || Fields.deformation) {
           const auto vi = load_row<RowVector<S>>(g.v[d] + row);
-          if constexpr (Fields.position) vp[d] += w * vi;
-          if constexpr (Fields.deformation)
-            for (int l = 0; l < Dim; ++l) grad_v[d * Dim + l] += vi * dw[l];
+          v_y[d] += wy * vi;
+          if constexpr (Fields.deformation && Dim == 2) v_dy[d] += dwy * vi;
         }
       }
     });
     if constexpr (Fields.velocity)
-      for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * reduce(ap[d]);
+      for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * reduce(st.wx * a_y[d]);
     if constexpr (Fields.position)
       for (int d = 0; d < Dim; ++d) {
-        const double dx = dt * reduce(vp[d]);
+        const double dx = dt * reduce(st.wx * v_y[d]);
         p.x[d][ip] += dx;
-        max_move = std::max(max_move, std::abs(dx) * guard.inv_h[d]);
+        max_move = std::max(max_move, std::abs(dx) * inv_h[d]);
       }
     if constexpr (Fields.deformation) {
       double F[Dim * Dim], Fn[Dim * Dim];
       for (int c = 0; c < Dim * Dim; ++c) F[c] = p.F[c][ip];
       double L[Dim * Dim];
-      for (int c = 0; c < Dim * Dim; ++c) L[c] = reduce(grad_v[c]);
+      for (int d = 0; d < Dim; ++d) {
+        L[d * Dim] = reduce(st.dwx * v_y[d]);
+        if constexpr (Dim == 2) L[d * Dim + 1] = reduce(st.wx * v_dy[d]);
+      }
       for (int a = 0; a < Dim; ++a)
         for (int b = 0; b < Dim; ++b) {
           double sum = F[a * Dim + b];
@@ -234,7 +241,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleVi
     }
     if constexpr (Fields.position || Fields.velocity)
       for (int d = 0; d < Dim; ++d)
-        if (!(p.x[d][ip] >= 0.0 && p.x[d][ip] <= guard.hi[d]) || !std::isfinite(p.v[d][ip])) guard.flag(ip);
+        if (!(p.x[d][ip] >= 0.0 && p.x[d][ip] <= hi[d]) || !std::isfinite(p.v[d][ip])) guard.flag(ip);
   }
   if constexpr (Fields.position) guard.moved(max_move);
 }
@@ -250,14 +257,14 @@ inline void apply_consistent_mass(const TensorBasis<Dim, Axis>& basis, const Par
     double xp[Dim];
     for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
     const auto st = stencil_at<Dim, S>(basis, xp);
-    RowVector<S> xp_lanes[Dim] = {};
+    RowVector<S> x_y[Dim] = {};  // Σ_j wy_j x_ij, then contracted with wx (as in gather_g2p)
     for_each_row(st, stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
-      for (int d = 0; d < Dim; ++d) xp_lanes[d] += st.wx * wy * load_row<RowVector<S>>(x[d] + row);
+      for (int d = 0; d < Dim; ++d) x_y[d] += wy * load_row<RowVector<S>>(x[d] + row);
     });
     double mx[Dim];  // m_p Σ_j φ_j x_j
-    for (int d = 0; d < Dim; ++d) mx[d] = p.m[ip] * reduce(xp_lanes[d]);
+    for (int d = 0; d < Dim; ++d) mx[d] = p.m[ip] * reduce(st.wx * x_y[d]);
     for_each_row(st, stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
-      for (int d = 0; d < Dim; ++d) add_to_row(y[d] + row, st.wx * wy * mx[d]);
+      for (int d = 0; d < Dim; ++d) add_to_row(y[d] + row, st.wx * (wy * mx[d]));
     });
   }
 }
