@@ -11,25 +11,6 @@ namespace mpm {
 
 using std::numbers::pi;
 
-template <int D>
-std::array<double, D> PlateBodyForce::at(std::size_t p) const {
-  if constexpr (D != 2) {
-    return {};
-  } else {
-    const double wt = c * pi * t / L;
-    const double sx = std::sin(2 * pi * X[0][p] / L), sy = std::sin(2 * pi * X[1][p] / L);
-    const double ux = A * sx * std::sin(wt), uy = A * sy * std::sin(wt + pi);
-    const double F11 = 1 + (2 * pi * A / L) * std::cos(2 * pi * X[0][p] / L) * std::sin(wt);
-    const double F22 = 1 + (2 * pi * A / L) * std::cos(2 * pi * X[1][p] / L) * std::sin(wt + pi);
-    const double common = 4 * mu / rho0 - c * c;
-    const double k = lambda * (std::log(F11 * F22) - 1) - mu;
-    const double f = pi * pi / (L * L);
-    return {f * ux * (common - 4 * k / (rho0 * F11 * F11)), f * uy * (common - 4 * k / (rho0 * F22 * F22))};
-  }
-}
-template std::array<double, 1> PlateBodyForce::at<1>(std::size_t) const;
-template std::array<double, 2> PlateBodyForce::at<2>(std::size_t) const;
-
 template <int Dim>
 BodyForce<Dim> Problem<Dim>::body_force(double, std::array<const double*, Dim>) const {
   return NoBodyForce{};
@@ -96,7 +77,7 @@ class VibratingPlate final : public Problem<2> {
   bool body_force_needs_reference() const override { return true; }
   bool has_body_force() const override { return true; }
   BodyForce<2> body_force(double t, std::array<const double*, 2> X) const override {
-    return PlateBodyForce{X, A_, L_, c_, k_.lambda, k_.mu, mat_.density, t};
+    return PlateBodyForce::at_time(X, A_, L_, c_, k_.lambda, k_.mu, mat_.density, t);
   }
   bool has_exact() const override { return true; }
   ExactState<2> exact(const std::array<double, 2>& X, double t) const override {
