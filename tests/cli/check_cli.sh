@@ -15,6 +15,9 @@ expect() {  # expect STATUS PATTERN -- command...
   else pass=$((pass+1)); fi
 }
 expect 0 "valid 2D scene" -- "$mpm" validate "$scenes/plate.json"
+for scene in "$scenes"/*.json "$scenes"/stability/*.json; do  # every scene the repository ships is valid
+  expect 0 "valid" -- "$mpm" validate "$scene"
+done
 expect 2 "material.E" -- "$mpm" validate "$scenes/plate.json" --set material.E=-1
 expect 2 "grid.cells" -- "$mpm" run "$scenes/plate.json" --set grid.cells=[0,8] --quiet
 expect 2 "material.nu" -- "$mpm" run "$scenes/plate.json" --set material.nu=0.5 --quiet
