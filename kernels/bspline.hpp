@@ -3,6 +3,7 @@
 // and the fixed-stencil fast path for linear and quadratic splines on an open uniform knot vector.
 // Both return the degree+1 functions that are non-zero at x: the index of the first, values and x-derivatives.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 #include <vector>
@@ -122,6 +123,27 @@ struct CoxDeBoorAxis {
   }
 };
 
+namespace detail {
+
+/// Coefficient table of UniformAxis<S>, [span class][power a, b, c][function] (see there).
+template <int S>
+using UniformTable = std::array<std::array<std::array<double, S>, 3>, S == 3 ? 4 : 1>;
+
+template <int S>
+constexpr UniformTable<S> uniform_coefficients() {
+  if constexpr (S == 3)
+    return {{
+        {{{0.5, 0.5, 0.0}, {-1.0, 1.0, 0.0}, {0.5, -1.0, 0.5}}},  // interior: uniform B-spline pieces
+        {{{1.0, 0.0, 0.0}, {-2.0, 2.0, 0.0}, {1.0, -1.5, 0.5}}},  // first cell: knots 0,0,0,1,2
+        {{{0.5, 0.5, 0.0}, {-1.0, 1.0, 0.0}, {0.5, -1.5, 1.0}}},  // last cell: the mirror image
+        {{{1.0, 0.0, 0.0}, {-2.0, 2.0, 0.0}, {1.0, -2.0, 1.0}}},  // one cell: Bernstein polynomials
+    }};
+  else
+    return {{{{{1.0, 0.0}, {-1.0, 1.0}, {0.0, 0.0}}}}};  // linear: 1 − ξ, ξ
+}
+
+}  // namespace detail
+
 /// Fast path of one axis: degree S-1 ∈ {1, 2} on an open uniform knot vector, from closed-form polynomials.
 /// Each function is a + b ξ + c ξ² in the local coordinate ξ ∈ [0, 1] of its cell; interior cells share one row
 /// of coefficients, the first and last cell (and a grid of one cell) have their own.
@@ -129,38 +151,35 @@ template <int S>
 struct UniformAxis {
   static_assert(S == 2 || S == 3, "fast path exists for linear and quadratic splines only");
   static constexpr int width = S;
+  /// [span class][power][function], span class = (first cell) + 2 (last cell) for quadratics: a power's
+  /// coefficients over the functions are contiguous, so the S functions evaluate as one SIMD vector (stencil.hpp)
+  static constexpr detail::UniformTable<S> coefficients = detail::uniform_coefficients<S>();
   double inv_h;  ///< 1 / cell size
   int cells;
 
   UniformAxis(int cells_, double length) : inv_h(cells_ / length), cells(cells_) {}
 
-  [[gnu::always_inline]] AxisWeights<S> operator()(double x) const {
-    // coefficient table [span class][function][a, b, c]; class = (first cell) + 2 (last cell)
-    static constexpr double quadratic[4][3][3] = {
-        {{0.5, -1.0, 0.5}, {0.5, 1.0, -1.0}, {0.0, 0.0, 0.5}},  // interior: uniform B-spline pieces
-        {{1.0, -2.0, 1.0}, {0.0, 2.0, -1.5}, {0.0, 0.0, 0.5}},  // first cell: knots 0,0,0,1,2
-        {{0.5, -1.0, 0.5}, {0.5, 1.0, -1.5}, {0.0, 0.0, 1.0}},  // last cell: the mirror image
-        {{1.0, -2.0, 1.0}, {0.0, 2.0, -2.0}, {0.0, 0.0, 1.0}},  // one cell: Bernstein polynomials
-    };
-    static constexpr double linear[2][3] = {{1.0, -1.0, 0.0}, {0.0, 1.0, 0.0}};
-    // the cell, clamped to the grid: floor(s) without the libm call (s ≤ 0, and NaN, give cell 0)
+  /// The cell of x, clamped to the grid, its local coordinate ξ and its span class.
+  struct Location {
+    int cell;
+    double xi;
+    int span_class;
+  };
+  [[gnu::always_inline]] Location locate(double x) const {
+    // floor(s) without the libm call (s ≤ 0, and NaN, give cell 0)
     const double s = x * inv_h;
     const int c = s > 0.0 ? std::min(static_cast<int>(std::min(s, double(cells))), cells - 1) : 0;
-    const double xi = s - c;
+    return {c, s - c, S == 3 ? (c == 0) + 2 * (c == cells - 1) : 0};
+  }
+
+  [[gnu::always_inline]] AxisWeights<S> operator()(double x) const {
+    const Location at = locate(x);
+    const auto& q = coefficients[at.span_class];
     AxisWeights<S> a;
-    a.first = c;
-    if constexpr (S == 2) {
-      for (int k = 0; k < 2; ++k) {
-        a.w[k] = linear[k][0] + xi * linear[k][1];
-        a.dw[k] = linear[k][1] * inv_h;
-      }
-    } else {
-      const int cls = (c == 0) + 2 * (c == cells - 1);
-      for (int k = 0; k < 3; ++k) {
-        const double* q = quadratic[cls][k];
-        a.w[k] = q[0] + xi * (q[1] + xi * q[2]);
-        a.dw[k] = (q[1] + 2.0 * xi * q[2]) * inv_h;
-      }
+    a.first = at.cell;
+    for (int k = 0; k < S; ++k) {
+      a.w[k] = q[0][k] + at.xi * (q[1][k] + at.xi * q[2][k]);
+      a.dw[k] = (q[1][k] + 2.0 * at.xi * q[2][k]) * inv_h;
     }
     return a;
   }

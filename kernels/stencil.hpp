@@ -11,6 +11,7 @@
 // that it never belongs to a block of the same colour (cell_bins.hpp), so no scatter races on it.
 #include <array>
 #include <experimental/simd>
+#include <type_traits>
 
 #include "kernels/bspline.hpp"
 
@@ -31,8 +32,10 @@ inline constexpr int stencil_lanes = S + S % 2;
 constexpr int grid_stride(int functions0, int width) { return functions0 + width % 2; }
 
 /// One stencil row of weights or grid values, a SIMD vector of stencil_lanes<S> doubles.
+/// The ABI is the target's native vector of that width where there is one (AVX: one __m256d), else fixed_size:
+/// with fixed_size on an AVX target GCC passed the stencil's rows through the stack and general registers.
 template <int S>
-using RowVector = std::experimental::fixed_size_simd<double, stencil_lanes<S>>;
+using RowVector = std::experimental::simd<double, std::experimental::simd_abi::deduce_t<double, stencil_lanes<S>>>;
 
 /// The row of grid values starting at p (any alignment).
 template <class V>
@@ -60,25 +63,62 @@ struct TensorBasis {
 /// The stencil of one point: the DOF of its first node, the padded axis-0 weights and the axis-1 weights.
 template <int Dim, int S>
 struct Stencil {
-  int first0 = 0, first1 = 0;  ///< first function index per axis
-  RowVector<S> wx, dwx;         ///< axis 0: φ and dφ/dx, zero in the padding lanes
-  double wy[S], dwy[S];         ///< axis 1 (2D only)
+  int first0 = 0, first1 = 0;                       ///< first function index per axis
+  RowVector<S> wx, dwx;                              ///< axis 0: φ and dφ/dx, zero in the padding lanes
+  double wy[stencil_lanes<S>], dwy[stencil_lanes<S>];  ///< axis 1 (2D only; the first S are the functions)
 };
+
+/// The functions of one axis non-zero at a point, as padded SIMD rows (zero in the padding lanes).
+template <int S>
+struct AxisRow {
+  int first;           ///< index of the first function
+  RowVector<S> w, dw;  ///< φ and dφ/dx
+};
+
+namespace detail {
+/// UniformAxis<S>::coefficients padded with zeros to stencil_lanes<S>: one SIMD load per power.
+template <int S>
+constexpr auto padded_uniform_coefficients() {
+  constexpr auto& table = UniformAxis<S>::coefficients;
+  std::array<std::array<std::array<double, stencil_lanes<S>>, 3>, table.size()> padded{};
+  for (std::size_t c = 0; c < table.size(); ++c)
+    for (int power = 0; power < 3; ++power)
+      for (int k = 0; k < S; ++k) padded[c][power][k] = table[c][power][k];
+  return padded;
+}
+template <int S>
+inline constexpr auto padded_uniform = padded_uniform_coefficients<S>();
+}  // namespace detail
+
+/// The fast path evaluates its S polynomials as vectors, a + ξ (b + ξ c) and (b + 2ξ c)/h, in the lanes of a row
+/// (the same arithmetic per function as UniformAxis::operator()); the generic path fills the lanes from its values.
+template <int S, class Axis>
+MPM_INLINE AxisRow<S> axis_row(const Axis& axis, double x) {
+  if constexpr (std::is_same_v<Axis, UniformAxis<S>>) {
+    const auto at = axis.locate(x);
+    const auto& q = detail::padded_uniform<S>[at.span_class];
+    const RowVector<S> a = load_row<RowVector<S>>(q[0].data()), b = load_row<RowVector<S>>(q[1].data()),
+                       c = load_row<RowVector<S>>(q[2].data());
+    return {at.cell, a + at.xi * (b + at.xi * c), (b + (2.0 * at.xi) * c) * axis.inv_h};
+  } else {
+    const AxisWeights<S> a = axis(x);
+    return {a.first, RowVector<S>([&](int i) { return i < S ? a.w[i] : 0.0; }),
+            RowVector<S>([&](int i) { return i < S ? a.dw[i] : 0.0; })};
+  }
+}
 
 template <int Dim, int S, class Axis>
 MPM_INLINE Stencil<Dim, S> stencil_at(const TensorBasis<Dim, Axis>& basis, const double* x) {
   Stencil<Dim, S> st;
-  const AxisWeights<S> a = basis.axis[0](x[0]);
+  const AxisRow<S> a = axis_row<S>(basis.axis[0], x[0]);
   st.first0 = a.first;
-  st.wx = RowVector<S>([&](int i) { return i < S ? a.w[i] : 0.0; });
-  st.dwx = RowVector<S>([&](int i) { return i < S ? a.dw[i] : 0.0; });
+  st.wx = a.w;
+  st.dwx = a.dw;
   if constexpr (Dim == 2) {
-    const AxisWeights<S> b = basis.axis[1](x[1]);
+    const AxisRow<S> b = axis_row<S>(basis.axis[1], x[1]);
     st.first1 = b.first;
-    for (int j = 0; j < S; ++j) {
-      st.wy[j] = b.w[j];
-      st.dwy[j] = b.dw[j];
-    }
+    b.w.copy_to(st.wy, std::experimental::element_aligned);
+    b.dw.copy_to(st.dwy, std::experimental::element_aligned);
   }
   return st;
 }
