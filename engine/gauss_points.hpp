@@ -47,7 +47,7 @@ struct GaussView {
 /// P2G from Gauss points order[begin..end) (paper eqs 22–25): m_i += φ_i ρ̂ω, q_i += φ_i ρv̂ω,
 /// f_i += −∇φ_i·σ̂ω + φ_i ρb̂ω.
 template <ScatterFields Fields, bool Body, int Dim, int S, class Axis>
-inline void scatter_gauss(const TensorBasis<Dim, Axis>& basis, const GaussView<Dim>& gp, const GridView<Dim>& g,
+inline void scatter_gauss(const TensorBasis<Dim, Axis>& basis, GaussView<Dim> gp, GridView<Dim> g,
                           const unsigned* order, std::size_t begin, std::size_t end) {
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ig = order[k];

@@ -94,7 +94,7 @@ inline MomentumTotals<Dim> sum_totals(const std::vector<MomentumTotals<Dim>>& pa
 /// f_i += φ_i mb − ∇φ_i·Vσ (eqs 2.31–2.33). A particle passes m_p, m_p v_p, V_p σ_p, m_p b_p; a Gauss point its
 /// reconstructed ρ̂ω, ρv̂ω, σ̂ω, ρb̂ω (paper eqs 22–25).
 template <ScatterFields Fields, int Dim, int S>
-MPM_INLINE void scatter_rows(const Stencil<Dim, S>& st, const GridView<Dim>& g, double m, const double (&mv)[Dim],
+MPM_INLINE void scatter_rows(const Stencil<Dim, S>& st, GridView<Dim> g, double m, const double (&mv)[Dim],
                              const double (&Vsig)[Dim][Dim], const double (&mb)[Dim]) {
   // φ_i = wx_i wy and ∇φ_i = (dwx_i wy, wx_i dwy): every row is wx times a scalar, the force's plus dwx times
   // another (f_id = φ_i mb_d − ∂₀φ_i Vσ_0d − ∂₁φ_i Vσ_1d), so the scalars are formed first, the rows last
@@ -114,8 +114,8 @@ MPM_INLINE void scatter_rows(const Stencil<Dim, S>& st, const GridView<Dim>& g, 
 /// P2G over particles order[begin..end): adds the selected sums into the grid; returns the particle momentum of
 /// the range when momentum is scattered.
 template <ScatterFields Fields, int Dim, int S, class Axis, class Body>
-inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p,
-                                       const GridView<Dim>& g, const unsigned* order, std::size_t begin,
+inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim> p,
+                                       GridView<Dim> g, const unsigned* order, std::size_t begin,
                                        std::size_t end, const Body& body) {
   MomentumTotals<Dim> totals;
   for (std::size_t k = begin; k < end; ++k) {
@@ -154,7 +154,7 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, cons
 /// are only read, the momenta only written by this block's colour.
 template <int Dim, int S, class Axis>
 inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<Dim, Axis>& basis,
-                                                             const ParticleView<Dim>& p, const GridView<Dim>& g,
+                                                             ParticleView<Dim> p, GridView<Dim> g,
                                                              const unsigned* order, std::size_t begin,
                                                              std::size_t end, double dt) {
   MomentumTotals<Dim> totals;
@@ -184,64 +184,70 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
 
 /// G2P over particles [begin, end): the selected updates; `stress(F, s)` is the constitutive law (σ from F).
 template <GatherFields Fields, int Dim, int S, class Axis, class Stress>
-MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& particles,
-                           const GridView<Dim>& grid, std::size_t begin, std::size_t end, double dt,
-                           const Stress& stress, ParticleGuard& guard) {
-  // local copies of the views and bounds: the constitutive law calls libm (log), and for all the compiler knows
-  // such a call may change the caller's objects, so it would reload every pointer after it
-  const ParticleView<Dim> p = particles;
-  const GridView<Dim> g = grid;
-  const std::array<double, 3> hi = guard.hi, inv_h = guard.inv_h;
+MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim> p, GridView<Dim> g,
+                           std::size_t begin, std::size_t end, double dt, const Stress& stress,
+                           ParticleGuard& guard) {
+  const std::array<double, 3> hi = guard.hi, inv_h = guard.inv_h;  // copies, as the views (views.hpp)
   double max_move = 0.0;  // cells
-  for (std::size_t ip = begin; ip < end; ++ip) {
-    double xp[Dim];
-    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
-    const auto st = stencil_at<Dim, S>(basis, xp);
-    // φ_i = wx_i wy_j: contract the rows along axis 1 first (a_y = Σ_j wy_j a_ij, and with dwy_j for ∂₁), then
-    // along axis 0 with wx or dwx; ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
-    RowVector<S> a_y[Dim] = {}, v_y[Dim] = {}, v_dy[Dim] = {};
-    for_each_row(st, g.stride1, [&](int row, double wy, double dwy) MPM_INLINE_LAMBDA {
-      for (int d = 0; d < Dim; ++d) {
-        if constexpr (Fields.velocity) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
-        if constexpr (Fields.position || Fields.deformation) {
-          const auto vi = load_row<RowVector<S>>(g.v[d] + row);
-          v_y[d] += wy * vi;
-          if constexpr (Fields.deformation && Dim == 2) v_dy[d] += dwy * vi;
+  // σ(F) in a second loop over a batch of particles: the constitutive law calls log, and around a call inside the
+  // gather loop every live vector register of the gather was spilled and reloaded (caller-saved in the x86-64 ABI)
+  constexpr std::size_t batch = 64;
+  for (std::size_t first = begin; first < end; first += batch) {
+    const std::size_t last = std::min(end, first + batch);
+    for (std::size_t ip = first; ip < last; ++ip) {
+      double xp[Dim];
+      for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
+      const auto st = stencil_at<Dim, S>(basis, xp);
+      // φ_i = wx_i wy_j: contract the rows along axis 1 first (a_y = Σ_j wy_j a_ij, and with dwy_j for ∂₁), then
+      // along axis 0 with wx or dwx; ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
+      RowVector<S> a_y[Dim] = {}, v_y[Dim] = {}, v_dy[Dim] = {};
+      for_each_row(st, g.stride1, [&](int row, double wy, double dwy) MPM_INLINE_LAMBDA {
+        for (int d = 0; d < Dim; ++d) {
+          if constexpr (Fields.velocity) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
+          if constexpr (Fields.position || Fields.deformation) {
+            const auto vi = load_row<RowVector<S>>(g.v[d] + row);
+            v_y[d] += wy * vi;
+            if constexpr (Fields.deformation && Dim == 2) v_dy[d] += dwy * vi;
+          }
         }
-      }
-    });
-    if constexpr (Fields.velocity)
-      for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * reduce(st.wx * a_y[d]);
-    if constexpr (Fields.position)
-      for (int d = 0; d < Dim; ++d) {
-        const double dx = dt * reduce(st.wx * v_y[d]);
-        p.x[d][ip] += dx;
-        max_move = std::max(max_move, std::abs(dx) * inv_h[d]);
-      }
-    if constexpr (Fields.deformation) {
-      double F[Dim * Dim], Fn[Dim * Dim];
-      for (int c = 0; c < Dim * Dim; ++c) F[c] = p.F[c][ip];
-      double L[Dim * Dim];
-      for (int d = 0; d < Dim; ++d) {
-        L[d * Dim] = reduce(st.dwx * v_y[d]);
-        if constexpr (Dim == 2) L[d * Dim + 1] = reduce(st.wx * v_dy[d]);
-      }
-      for (int a = 0; a < Dim; ++a)
-        for (int b = 0; b < Dim; ++b) {
-          double sum = F[a * Dim + b];
-          for (int c = 0; c < Dim; ++c) sum += dt * L[a * Dim + c] * F[c * Dim + b];
-          Fn[a * Dim + b] = sum;
+      });
+      if constexpr (Fields.velocity)
+        for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * reduce(st.wx * a_y[d]);
+      if constexpr (Fields.position)
+        for (int d = 0; d < Dim; ++d) {
+          const double dx = dt * reduce(st.wx * v_y[d]);
+          p.x[d][ip] += dx;
+          max_move = std::max(max_move, std::abs(dx) * inv_h[d]);
         }
-      for (int c = 0; c < Dim * Dim; ++c) p.F[c][ip] = Fn[c];
-      double s[sym_components<Dim>];
-      stress(Fn, s);
-      for (int c = 0; c < sym_components<Dim>; ++c) p.s[c][ip] = s[c];
-      const double J = Dim == 1 ? Fn[0] : Fn[0] * Fn[3] - Fn[1] * Fn[2];
-      if (!(J > 0.0) || !std::isfinite(J + s[0])) guard.flag(ip);
+      if constexpr (Fields.deformation) {
+        double F[Dim * Dim], Fn[Dim * Dim];
+        for (int c = 0; c < Dim * Dim; ++c) F[c] = p.F[c][ip];
+        double L[Dim * Dim];
+        for (int d = 0; d < Dim; ++d) {
+          L[d * Dim] = reduce(st.dwx * v_y[d]);
+          if constexpr (Dim == 2) L[d * Dim + 1] = reduce(st.wx * v_dy[d]);
+        }
+        for (int a = 0; a < Dim; ++a)
+          for (int b = 0; b < Dim; ++b) {
+            double sum = F[a * Dim + b];
+            for (int c = 0; c < Dim; ++c) sum += dt * L[a * Dim + c] * F[c * Dim + b];
+            Fn[a * Dim + b] = sum;
+          }
+        for (int c = 0; c < Dim * Dim; ++c) p.F[c][ip] = Fn[c];
+      }
+      if constexpr (Fields.position || Fields.velocity)
+        for (int d = 0; d < Dim; ++d)
+          if (!(p.x[d][ip] >= 0.0 && p.x[d][ip] <= hi[d]) || !std::isfinite(p.v[d][ip])) guard.flag(ip);
     }
-    if constexpr (Fields.position || Fields.velocity)
-      for (int d = 0; d < Dim; ++d)
-        if (!(p.x[d][ip] >= 0.0 && p.x[d][ip] <= hi[d]) || !std::isfinite(p.v[d][ip])) guard.flag(ip);
+    if constexpr (Fields.deformation)
+      for (std::size_t ip = first; ip < last; ++ip) {
+        double F[Dim * Dim], s[sym_components<Dim>];
+        for (int c = 0; c < Dim * Dim; ++c) F[c] = p.F[c][ip];
+        stress(F, s);
+        for (int c = 0; c < sym_components<Dim>; ++c) p.s[c][ip] = s[c];
+        const double J = Dim == 1 ? F[0] : F[0] * F[3] - F[1] * F[2];
+        if (!(J > 0.0) || !std::isfinite(J + s[0])) guard.flag(ip);
+      }
   }
   if constexpr (Fields.position) guard.moved(max_move);
 }
@@ -249,8 +255,8 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, const ParticleVi
 /// y += M x for particles order[begin..end), with the consistent mass M_ij = Σ_p φ_i m_p φ_j (eq. 2.31), applied
 /// matrix-free: a gather of x to the particle followed by a scatter of m_p times it. Components are independent.
 template <int Dim, int S, class Axis>
-inline void apply_consistent_mass(const TensorBasis<Dim, Axis>& basis, const ParticleView<Dim>& p, int stride1,
-                                  const std::array<const double*, Dim>& x, const std::array<double*, Dim>& y,
+inline void apply_consistent_mass(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim> p, int stride1,
+                                  std::array<const double*, Dim> x, std::array<double*, Dim> y,
                                   const unsigned* order, std::size_t begin, std::size_t end) {
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
