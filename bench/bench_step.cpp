@@ -3,7 +3,8 @@
 // the fast path; 4 particles per cell (2D: 2x2, 1D: 4). Arguments: nominal particle count and TBB threads.
 // Sizes: 2D 1e3 ... 1e7 (cells = sqrt(N/4) per axis), 1D 1e3 ... 4e6 (2^20 cells is the scene's limit).
 //
-//   step/<dim>d/<scheme>/n:<N>/threads:<T>     scheme: usl, musl (direct mapping), musl-tls (TLS reconstruction)
+//   step/<dim>d/<scheme>/n:<N>/threads:<T>     scheme: usl, musl (direct mapping), musl-tls (TLS reconstruction),
+//                                              usl-generic (USL with the Cox–de Boor weights: grid.basis_path generic)
 //
 // Counter particle_steps_per_s = particles x steps / wall time. Set-up (scene parsing, seeding, the first-touch
 // of every array) is outside the timed loop. A Simulation is reused by consecutive benchmarks with the same
@@ -31,18 +32,19 @@ constexpr std::size_t kLarge = 5'000'000;  // from here: one period per run, one
 /// The headline scene; `n` nominal particles, 4 per cell.
 nlohmann::json scene_json(int dim, std::int64_t n, const std::string& scheme) {
   nlohmann::json material{{"model", "neo-hookean"}, {"E", 1e6}, {"nu", 0.3}, {"density", 1000}};
+  const std::string path = scheme == "usl-generic" ? "generic" : "fast";
   nlohmann::json j;
   if (dim == 2) {
     const int cells = mpm_bench::cells_for_2d(n);
     j = {{"dimension", 2},
-         {"grid", {{"length", {1, 1}}, {"cells", {cells, cells}}, {"basis", "bspline2"}, {"basis_path", "fast"}}},
+         {"grid", {{"length", {1, 1}}, {"cells", {cells, cells}}, {"basis", "bspline2"}, {"basis_path", path}}},
          {"particles", {{"per_cell", {2, 2}}}},
          {"bodies", {{{"box", {{0, 0}, {1, 1}}}, {"velocity", {0.1, 0.05}}}}},
          {"fixed", {"x-", "x+", "y-", "y+"}}};
   } else {
     const int cells = std::max<int>(1, static_cast<int>(n / 4));
     j = {{"dimension", 1},
-         {"grid", {{"length", {1}}, {"cells", {cells}}, {"basis", "bspline2"}, {"basis_path", "fast"}}},
+         {"grid", {{"length", {1}}, {"cells", {cells}}, {"basis", "bspline2"}, {"basis_path", path}}},
          {"particles", {{"per_cell", {4}}}},
          {"bodies", {{{"box", {{0}, {1}}}, {"velocity", {0.1}}}}},
          {"fixed", {"x-", "x+"}}};
@@ -50,7 +52,8 @@ nlohmann::json scene_json(int dim, std::int64_t n, const std::string& scheme) {
   j["material"] = material;
   // "musl-tls": MUSL with the TLS reconstruction (Gauss-point P2G), against the direct mapping of "musl"
   const bool tls = scheme == "musl-tls";
-  j["algorithm"] = {{"update", tls ? "musl" : scheme}, {"mass", "lumped"}, {"mapping", tls ? "tls" : "direct"}};
+  const std::string update = tls ? "musl" : scheme == "usl-generic" ? "usl" : scheme;
+  j["algorithm"] = {{"update", update}, {"mass", "lumped"}, {"mapping", tls ? "tls" : "direct"}};
   j["time"] = {{"cfl", 0.2}, {"end", 1000.0}};  // never reached within a benchmark
   return j;
 }
@@ -121,9 +124,11 @@ const bool registered = [] {
   const std::vector<std::int64_t> sizes_1d{1'000, 10'000, 100'000, 1'000'000, 4'000'000};
   const std::vector<std::int64_t> sizes_2d{1'000, 10'000, 100'000, 1'000'000, 10'000'000};
   for (int dim : {1, 2})
-    for (const char* scheme : {"usl", "musl", "musl-tls"})
+    for (const char* scheme : {"usl", "musl", "musl-tls", "usl-generic"})
       for (std::int64_t n : dim == 1 ? sizes_1d : sizes_2d) {
         if (std::string(scheme) == "musl-tls" && n > 1'000'000) continue;  // ~10x the direct cost per step
+        // the whole-step cost of the generic weights, beside the fast path's (2D, 1e5 and 1e6)
+        if (std::string(scheme) == "usl-generic" && (dim == 1 || n < 100'000 || n > 1'000'000)) continue;
         const std::string name = "step/" + std::to_string(dim) + "d/" + scheme;
         auto fn = dim == 1 ? BM_Step<1> : BM_Step<2>;
         auto* b = benchmark::RegisterBenchmark(name.c_str(), fn, std::string(scheme))

@@ -295,11 +295,13 @@ def section_step(lines, res):
                  "lumped mass, quadratic B-splines (fast path), 4 particles per cell. A run is a whole number of "
                  "16-step reorder periods. *2-thr speed-up* = time(1 thread) / time(2 threads); "
                  "*USL/MUSL* = throughput of USL / throughput of MUSL at the same thread count; "
-                 "*TLS/direct* = throughput of MUSL with the TLS reconstruction / MUSL with direct mapping.")
+                 "*TLS/direct* = throughput of MUSL with the TLS reconstruction / MUSL with direct mapping; "
+                 "*fast/generic* = throughput of USL on the fast path / USL-GENERIC, the same step with the "
+                 "Cox–de Boor weights (`grid.basis_path` generic).")
     lines.append("")
-    lines.append("| dim | scheme | particles | threads | time / step | particle-steps/s | 2-thr speed-up | USL/MUSL | TLS/direct | runs | cv % | CPU/wall |")
-    lines.append("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
-    order = {"usl": 0, "musl": 1, "musl-tls": 2}
+    lines.append("| dim | scheme | particles | threads | time / step | particle-steps/s | 2-thr speed-up | USL/MUSL | TLS/direct | fast/generic | runs | cv % | CPU/wall |")
+    lines.append("|---|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|")
+    order = {"usl": 0, "musl": 1, "musl-tls": 2, "usl-generic": 3}
     for key in sorted(rows, key=lambda k: (k[0], order.get(k[1], 3), k[2], k[3])):
         dim, scheme, n, t = key
         e = rows[key]
@@ -310,8 +312,11 @@ def section_step(lines, res):
                  if scheme == "usl" and usl and musl else "")
         tls = (f"{e['particle_steps_per_s'] / musl['particle_steps_per_s']:.2f}"
                if scheme == "musl-tls" and musl else "")
+        generic = (f"{usl['particle_steps_per_s'] / e['particle_steps_per_s']:.2f}"
+                   if scheme == "usl-generic" and usl else "")
         lines.append(f"| {dim} | {scheme.upper()} | {int(e.get('particles', n)):,} | {t} | {fmt_time(e['seconds'])} | "
-                     f"{fmt_rate(e.get('particle_steps_per_s'))} | {sp} | {ratio} | {tls} | {e['reps']} | {fmt_pct(e)} | {busy(e)} |")
+                     f"{fmt_rate(e.get('particle_steps_per_s'))} | {sp} | {ratio} | {tls} | {generic} | {e['reps']} | "
+                     f"{fmt_pct(e)} | {busy(e)} |")
     lines.append("")
 
 
@@ -352,7 +357,8 @@ def plot(res, png):
         series.setdefault((dim, scheme, t), []).append((e.get("particles", n), e["particle_steps_per_s"]))
     fig, ax = plt.subplots(figsize=(8, 5.5))
     colours = {("1d", "usl"): "tab:blue", ("1d", "musl"): "tab:cyan", ("1d", "musl-tls"): "tab:purple",
-               ("2d", "usl"): "tab:red", ("2d", "musl"): "tab:orange", ("2d", "musl-tls"): "tab:brown"}
+               ("2d", "usl"): "tab:red", ("2d", "musl"): "tab:orange", ("2d", "musl-tls"): "tab:brown",
+               ("2d", "usl-generic"): "tab:gray"}
     for key in sorted(series, key=lambda k: (k[0], k[1] != "usl", k[2])):
         dim, scheme, t = key
         pts = sorted(series[key])
