@@ -404,8 +404,11 @@ void Simulation<Dim>::step() {
     bins_.adopt_order();
   }
   const BodyForce<Dim> body = problem_->body_force(time_, reference_columns());
+  // a step that throws has moved the particles by an unknown amount: until it returns, bin before the next scatter
+  const double moved_before = moved_cells_;
+  moved_cells_ = std::numeric_limits<double>::infinity();
   std::visit([&](const auto& basis, const auto& material,
-                 const auto& force) { moved_cells_ += step_with(basis, material, force, dt); },
+                 const auto& force) { moved_cells_ = moved_before + step_with(basis, material, force, dt); },
              basis_, material_, body);
   ++step_;
   time_ = step_ == steps_total_ ? scene_.time.end : dt_ * step_;
