@@ -28,10 +28,8 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene)
       tls_degree_(scene.algorithm.tls_degree),
       mls_support_(scene.algorithm.mls_support),
       cells_(first_n<Dim>(scene.grid.cells)),
-      bins_(cells_, first_n<Dim>(scene.grid.length), [&] {
-        const int width = degree_of(scene.grid.basis) + 1;
-        return CellBins<Dim>::block_width_for(width + width % 2, 0);  // Gauss points do not move
-      }()) {
+      bins_(cells_, first_n<Dim>(scene.grid.length),  // Gauss points do not move: no slack
+            CellBins<Dim>::block_width_for(stencil_reach(degree_of(scene.grid.basis) + 1), 0)) {
   std::size_t ncells = 1;
   for (int d = 0; d < Dim; ++d) {
     h_[d] = scene.grid.length[d] / cells_[d];

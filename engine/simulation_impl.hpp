@@ -242,8 +242,8 @@ Simulation<Dim>::Simulation(const Scene& scene)
           c[d] = scene.grid.cells[d];
           l[d] = scene.grid.length[d];
         }
-        const int width = degree_of(scene.grid.basis) + 1;
-        return CellBins<Dim>(c, l, CellBins<Dim>::block_width_for(width + width % 2, bin_slack_cells));
+        const int reach = stencil_reach(degree_of(scene.grid.basis) + 1);
+        return CellBins<Dim>(c, l, CellBins<Dim>::block_width_for(reach, bin_slack_cells));
       }()) {
   if (scene.dimension != Dim) throw std::logic_error("Simulation: scene dimension does not match");
 

@@ -24,8 +24,9 @@
 namespace mpm {
 
 /// DOFs per stencil row in the kernels' inner loops: the stencil width rounded up to an even count.
+constexpr int stencil_reach(int width) { return width + width % 2; }
 template <int S>
-inline constexpr int stencil_lanes = S + S % 2;
+inline constexpr int stencil_lanes = stencil_reach(S);
 
 /// Functions per grid row in memory: the functions along axis 0 plus the ghost columns of the padding lanes of a
 /// stencil `width` functions wide.
