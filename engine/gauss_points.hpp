@@ -21,6 +21,7 @@
 #include <stdexcept>
 #include <vector>
 
+#include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
 #include "engine/body_extent.hpp"
@@ -77,6 +78,15 @@ class GaussPoints {
   MomentumTotals<Dim> rebuild(const ParticleView<Dim>& p, const CellBins<Dim>& particles_by_cell, const Body& body,
                               bool stress);
 
+  /// The momentum again after rebuild(…, stress = true), when the particles' velocities are all that changed
+  /// since (the second P2G of MUSL: positions, J and masses as in that rebuild). TLS keeps that rebuild's density
+  /// at the Gauss points, its density fallbacks and its neighbourhood normal matrices, and refits only the
+  /// velocity: the same numbers as rebuild(…, false), for about a third of its cost. MLS and the cubic spline
+  /// rebuild as usual.
+  template <class Body>
+  MomentumTotals<Dim> rebuild_momentum(const ParticleView<Dim>& p, const CellBins<Dim>& particles_by_cell,
+                                       const Body& body);
+
   GaussView<Dim> view() const;
   /// The Gauss points as mass carriers, for the consistent-mass operator M_ij = Σ_g φ_i ρ̂ω φ_j (thesis eq. 3.9).
   ParticleView<Dim> mass_view();
@@ -92,8 +102,8 @@ class GaussPoints {
   }
 
  private:
-  /// TLS; σ and ρb only when Stress.
-  template <int Degree, bool Stress, class Body>
+  /// TLS; σ and ρb only when Stress; Reuse: the momentum only, from what the last rebuild kept (rebuild_momentum).
+  template <int Degree, bool Stress, bool Reuse, class Body>
   MomentumTotals<Dim> rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body);
   template <class Body>
   MomentumTotals<Dim> rebuild_mls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body,
@@ -140,6 +150,15 @@ class GaussPoints {
     }
     s->items.resize(n);
     return s->items;
+  }
+  /// Calls f(c) for every cell c < ncells, in parallel. Chunks of cells, not one task per cell: with
+  /// tbb::parallel_for's index form (grain 1) the partitioner's splitting was 5 % of a TLS step.
+  template <class F>
+  static void for_each_cell(std::size_t ncells, F&& f) {
+    constexpr std::size_t grain = 64;
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ncells, grain), [&](const tbb::blocked_range<std::size_t>& r) {
+      for (std::size_t c = r.begin(); c < r.end(); ++c) f(c);
+    });
   }
   /// Calls f(n) for the cells n next to cell c along `axis` (one or two).
   template <class F>
@@ -189,6 +208,7 @@ class GaussPoints {
     std::vector<T> items;
   };
   std::vector<std::unique_ptr<ScratchBase>> scratch_;  ///< per-cell sums of TLS rebuilds, kept between passes
+  bool tls_kept_ = false;  ///< a TLS rebuild left what rebuild_momentum reuses
   // cubic-spline mapping only (1D)
   GaussRule half_rule_;                                    ///< Gauss rule of a half knot span, on [0, 1]
   GaussRule cell_rule_;                                    ///< 1D TLS: the Gauss rule of a cell, on [0, 1]
@@ -246,12 +266,24 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild(const ParticleView<Dim>& p, const 
   if (mapping_ == Mapping::mls) return rebuild_mls(p, cells, body, stress);
   if (mapping_ == Mapping::cubic_spline) return rebuild_cubic_spline(p, cells, body, stress);
   auto tls = [&]<int Degree>() {
-    return stress ? rebuild_tls<Degree, true>(p, cells, body) : rebuild_tls<Degree, false>(p, cells, body);
+    return stress ? rebuild_tls<Degree, true, false>(p, cells, body) : rebuild_tls<Degree, false, false>(p, cells, body);
   };
   switch (tls_degree_) {
     case 0: return tls.template operator()<0>();
     case 1: return tls.template operator()<1>();
     default: return tls.template operator()<2>();
+  }
+}
+
+template <int Dim>
+template <class Body>
+MomentumTotals<Dim> GaussPoints<Dim>::rebuild_momentum(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
+                                                       const Body& body) {
+  if (mapping_ != Mapping::tls || !tls_kept_) return rebuild(p, cells, body, false);
+  switch (tls_degree_) {
+    case 0: return rebuild_tls<0, false, true>(p, cells, body);
+    case 1: return rebuild_tls<1, false, true>(p, cells, body);
+    default: return rebuild_tls<2, false, true>(p, cells, body);
   }
 }
 
@@ -331,12 +363,22 @@ struct TlsCellSums {
   }
 };
 
+/// What a TLS rebuild keeps of a cell's fits for a later momentum-only rebuild of the same particle positions
+/// (GaussPoints::rebuild_momentum): the density fit's outcome (its values stay at the Gauss points) and the normal
+/// matrix of the neighbourhood fit, whose congruence moves are the costly part of summing it.
+template <int Dim, int Degree>
+struct TlsKeptFit {
+  FitStatus rho;
+  Eigen::Matrix<double, taylor_size<Dim>(Degree), taylor_size<Dim>(Degree)> neighbourhood_D;
+};
+
 }  // namespace detail
 
 template <int Dim>
-template <int Degree, bool Stress, class Body>
+template <int Degree, bool Stress, bool Reuse, class Body>
 MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
                                                   const Body& body) {
+  static_assert(!(Stress && Reuse), "a momentum-only rebuild has no stress");
   constexpr int KS = Stress ? sym_components<Dim> + Dim : 0;  // σ, ρb
   constexpr int KF = Dim + KS;                                 // the unconstrained fits: v | σ, ρb
   using Sums = detail::TlsCellSums<Dim, Degree, 1 + KF>;
@@ -345,9 +387,11 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
   using FitSystem = detail::TaylorNormalSystem<Dim, Degree, KF>;
   std::size_t ncells = 1;
   for (int d = 0; d < Dim; ++d) ncells *= cells_[d];
-  std::vector<MomentumTotals<Dim>> totals(ncells);
-  std::vector<FallbackCounts> counts(ncells);
+  std::vector<MomentumTotals<Dim>>& totals = scratch<MomentumTotals<Dim>>(ncells);
+  std::vector<FallbackCounts>& counts = scratch<FallbackCounts>(ncells);
   std::vector<Sums>& sums = scratch<Sums>(ncells);
+  std::vector<detail::TlsKeptFit<Dim, Degree>>& kept = scratch<detail::TlsKeptFit<Dim, Degree>>(ncells);
+  if (!Reuse) tls_kept_ = false;  // until this rebuild completes
   const unsigned* order = cells.order().data();
   Extent1d extent{-1e300, 1e300};
   if constexpr (Dim == 1) extent = body_extent_1d(p, cells.order().size());
@@ -370,42 +414,54 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
   // from 5570 to 2400 instructions per particle (callgrind; docs/RECONSTRUCTION.md). Neighbours weigh as much as
   // own particles here (TlsOptions::neighbour_weight = 1, the thesis' choice): a separable sum cannot weigh them
   // apart.
-  tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
+  for_each_cell(ncells, [&](std::size_t c) {
     const auto [begin, end] = cells.block_range(c);
     Sums& cs = sums[c];
     cs = Sums{};
+    totals[c] = MomentumTotals<Dim>{};
     if (begin == end) return;
     const TaylorFrame<Dim> frame(tls_box(c));
-    for (std::size_t k = begin; k < end; ++k) {
-      const std::size_t ip = order[k];
-      Values f;
-      Vec<Dim> x;
-      double v[Dim];
-      const double rho = p.m[ip] / (det(p, ip) * p.V0[ip]);  // V_p = J_p V0_p (eq. 2.42)
-      f[0] = rho;
-      for (int d = 0; d < Dim; ++d) {
-        x[d] = p.x[d][ip];
-        f[1 + d] = v[d] = p.v[d][ip];
+    Values lo = cs.lo, hi = cs.hi;  // locals while the particles stream in (see add_samples)
+    double mass = 0.0;
+    Eigen::Matrix<double, Dim, 1> momentum = Eigen::Matrix<double, Dim, 1>::Zero();
+    MomentumTotals<Dim> total;
+    cs.sys.add_samples([&](auto&& add_one) {
+      for (std::size_t k = begin; k < end; ++k) {
+        const std::size_t ip = order[k];
+        Values f;
+        Vec<Dim> x;
+        double v[Dim];
+        const double rho = p.m[ip] / (det(p, ip) * p.V0[ip]);  // V_p = J_p V0_p (eq. 2.42)
+        f[0] = rho;
+        for (int d = 0; d < Dim; ++d) {
+          x[d] = p.x[d][ip];
+          f[1 + d] = v[d] = p.v[d][ip];
+        }
+        if constexpr (Stress) {
+          for (int i = 0; i < sym_components<Dim>; ++i) f[1 + Dim + i] = p.s[i][ip];
+          std::array<double, Dim> b{};
+          if constexpr (Body::active) b = body.template at<Dim>(ip);
+          for (int d = 0; d < Dim; ++d) f[1 + Dim + sym_components<Dim> + d] = rho * b[d];
+        }
+        add_one(frame.xi(x), f, 1.0);
+        lo = lo.cwiseMin(f);
+        hi = hi.cwiseMax(f);
+        mass += p.m[ip];
+        for (int d = 0; d < Dim; ++d) momentum[d] += p.m[ip] * v[d];
+        total.add(p.m[ip], v);
       }
-      if constexpr (Stress) {
-        for (int i = 0; i < sym_components<Dim>; ++i) f[1 + Dim + i] = p.s[i][ip];
-        std::array<double, Dim> b{};
-        if constexpr (Body::active) b = body.template at<Dim>(ip);
-        for (int d = 0; d < Dim; ++d) f[1 + Dim + sym_components<Dim> + d] = rho * b[d];
-      }
-      cs.sys.add_sample(frame.xi(x), f, 1.0);
-      cs.lo = cs.lo.cwiseMin(f);
-      cs.hi = cs.hi.cwiseMax(f);
-      cs.mass += p.m[ip];
-      for (int d = 0; d < Dim; ++d) cs.momentum[d] += p.m[ip] * v[d];
-      totals[c].add(p.m[ip], v);
-    }
+    });
     cs.sys.points = end - begin;
+    cs.lo = lo;
+    cs.hi = hi;
+    cs.mass = mass;
+    cs.momentum = momentum;
+    totals[c] = total;
   });
 
   auto frame_of = [&](std::size_t c) { return TaylorFrame<Dim>(tls_box(c)); };
   // Pass 2: row sums, for every cell (a cell without particles may still join its neighbours' sums).
-  tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
+  for_each_cell(ncells, [&](std::size_t c) {
     Sums& cs = sums[c];
     cs.row = cs.template fields<1, KF>();
     const TaylorFrame<Dim> frame = frame_of(c);
@@ -417,9 +473,10 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
   });
 
   // Pass 3: the fits, the limiter and the Gauss-point values, per cell.
-  tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
+  for_each_cell(ncells, [&](std::size_t c) {
     const Sums& cs = sums[c];
     const std::size_t first = c * per_cell_;
+    counts[c] = FallbackCounts{};
     if (cs.sys.points == 0) {  // an empty cell carries nothing: nothing to conserve there
       for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
       return;
@@ -441,13 +498,19 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     // §5.2.3) was measured to bias the slopes of compressed cells (plate, A = 0.1: 64-cell error 2.4x larger);
     // a cell its own particles do not determine drops to a lower degree instead, conservative all the same.
     // The cell's mass Σ m_p fixes the first Taylor coefficient of ρ (thesis eq. 5.9).
-    auto rho_sys = cs.template fields<0, 1>();
-    rho_sys.reshift(Eigen::Matrix<double, 1, 1>(cs.mass / volume));
-    const auto rho_fit = detail::complete_fit<Degree>(box, rho_sys, true, [](auto&) { return false; }, TlsOptions{});
-    counts[c].add(rho_fit.status);
-    std::array<Eigen::Matrix<double, 1, 1>, max_per_cell> rho;
-    detail::limited_values<Dim, 1>(rho_fit, cs.lo.template head<1>().eval(), cs.hi.template head<1>().eval(),
-                                   points, rho.data());
+    // A momentum-only rebuild keeps the density at the Gauss points (m_): the particles it came from are unchanged.
+    if constexpr (!Reuse) {
+      auto rho_sys = cs.template fields<0, 1>();
+      rho_sys.reshift(Eigen::Matrix<double, 1, 1>(cs.mass / volume));
+      const auto rho_fit =
+          detail::complete_fit<Degree>(box, rho_sys, true, [](auto&) { return false; }, TlsOptions{});
+      kept[c].rho = rho_fit.status;
+      std::array<Eigen::Matrix<double, 1, 1>, max_per_cell> rho;
+      detail::limited_values<Dim, 1>(rho_fit, cs.lo.template head<1>().eval(), cs.hi.template head<1>().eval(),
+                                     points, rho.data());
+      for (int g = 0; g < per_cell_; ++g) m_[first + g] = local_w_[g] * volume * rho[g][0];
+    }
+    counts[c].add(kept[c].rho);
 
     // The unconstrained fits (velocity, stress) have no integral to anchor them. From its own particles alone a cell
     // fits them only with at least two samples per Taylor function and a well-conditioned normal matrix (relative
@@ -465,8 +528,13 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
       sys = cs.row;
       if constexpr (Dim == 2)
         for_each_neighbour_along(c, 1, [&](std::size_t n) {
-          sys.add_moved(sums[n].row, TaylorChange<Dim, Degree, 2u>(frame_of(n), frame), 1.0);
+          const TaylorChange<Dim, Degree, 2u> change(frame_of(n), frame);
+          const auto& row = sums[n].row;
+          if constexpr (Reuse) sys.add_moved_rhs(row.D.col(0), row.b, row.shift, row.points, change, 1.0);
+          else sys.add_moved(row, change, 1.0);
         });
+      if constexpr (Reuse) sys.D = kept[c].neighbourhood_D;  // the same positions: the same matrix
+      else kept[c].neighbourhood_D = sys.D;
       return sys.points > cs.sys.points;
     };
     auto fit_sys = cs.template fields<1, KF>();
@@ -487,8 +555,6 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     double m_g = 0.0;
     Eigen::Matrix<double, Dim, 1> q_g = Eigen::Matrix<double, Dim, 1>::Zero();
     for (int g = 0; g < per_cell_; ++g) {
-      const double w = local_w_[g] * volume;
-      m_[first + g] = w * rho[g][0];
       m_g += m_[first + g];
       q_g += m_[first + g] * values[g].template head<Dim>();
     }
@@ -503,6 +569,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     }
   });
   for (const auto& c : counts) fallbacks_ += c;
+  tls_kept_ = true;
   return sum_totals(totals);
 }
 
@@ -524,7 +591,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_mls(const ParticleView<Dim>& p, co
   Vec<Dim> h;
   for (int d = 0; d < Dim; ++d) h[d] = h_[d];
 
-  tbb::parallel_for(std::size_t(0), ncells, [&](std::size_t c) {
+  for_each_cell(ncells, [&](std::size_t c) {
     const auto own_range = cells.block_range(c);
     const std::size_t first = c * per_cell_;
     for (int g = 0; g < per_cell_; ++g) clear_point(first + g);

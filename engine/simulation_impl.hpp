@@ -565,9 +565,12 @@ double Simulation<Dim>::step_with(const B& basis, const M& material, const F& bo
   block_momentum_.assign(bins_.blocks(), MomentumTotals<Dim>{});
   // P2G, direct (particles as integration points) or from the Gauss points of the reconstruction, which is
   // rebuilt from the particles first (with stress and body force when the force is scattered)
-  auto scatter = [&]<ScatterFields Fields>() {
+  // (only_velocities_changed: since the last scatter, as in MUSL's second P2G; the reconstruction reuses its work)
+  auto scatter = [&]<ScatterFields Fields>(bool only_velocities_changed = false) {
     if (gauss_) {
-      const MomentumTotals<Dim> totals = gauss_->rebuild(pv, *particle_cells_, body, Fields.force);
+      const MomentumTotals<Dim> totals = only_velocities_changed
+                                             ? gauss_->rebuild_momentum(pv, *particle_cells_, body)
+                                             : gauss_->rebuild(pv, *particle_cells_, body, Fields.force);
       const auto gp = gauss_->view();
       const unsigned* gorder = gauss_->bins().order().data();
       gauss_->bins().for_each_block_coloured([&](std::size_t b, std::size_t e) {
@@ -663,7 +666,7 @@ double Simulation<Dim>::step_with(const B& basis, const M& material, const F& bo
       clear_grid(false, true, false);
       if (gauss_) {
         gather.template operator()<GatherFields{true, false, false}>("g2p-velocity");
-        scatter.template operator()<ScatterFields{false, true, false}>();
+        scatter.template operator()<ScatterFields{false, true, false}>(true);
       } else {
         bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
           block_momentum_[block] = advance_velocity_scatter_momentum<Dim, S>(basis, pv, gv, order, b, e, dt);
