@@ -36,8 +36,28 @@ CellBins<Dim>::CellBins(std::array<int, Dim> cells, std::array<double, Dim> leng
   colour_begin_[0] = 0;
   for (int c = 0; c < (1 << Dim); ++c) colour_begin_[c + 1] = colour_begin_[c] + per_colour[c];
   auto next = colour_begin_;
-  for (std::size_t b = 0; b < total; ++b) rank_[b] = static_cast<unsigned>(next[colour_of(b)]++);
+  block_of_rank_.resize(total);
+  for (std::size_t b = 0; b < total; ++b) {
+    rank_[b] = static_cast<unsigned>(next[colour_of(b)]++);
+    block_of_rank_[rank_[b]] = static_cast<unsigned>(b);
+  }
   block_begin_.assign(total + 1, 0);
+}
+
+template <int Dim>
+CellBins<Dim> CellBins<Dim>::single_cells_in_order_of(const CellBins& layout) {
+  std::array<double, Dim> length;
+  for (int d = 0; d < Dim; ++d) length[d] = layout.cells_[d] / layout.inv_h_[d];
+  CellBins cells(layout.cells_, length, 1);
+  cells.inv_h_ = layout.inv_h_;  // the same cell of every position as the layout
+  std::size_t next = 0;
+  for (const unsigned block : layout.block_of_rank_)  // serially, in the order of for_each_cell_by_block
+    layout.for_each_cell_of_block(block, [&](std::size_t cell) {
+      cells.rank_[cell] = static_cast<unsigned>(next);
+      cells.block_of_rank_[next++] = static_cast<unsigned>(cell);
+    });
+  cells.coloured_ = false;
+  return cells;
 }
 
 template <int Dim>

@@ -5,9 +5,11 @@
 // moved a little since they were binned. One tbb::parallel_for per colour needs no atomics, and since the order
 // of the sums into each DOF is fixed by the (stable) sort and the colour sequence, the result is bitwise
 // identical for any thread count.
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <span>
+#include <stdexcept>
 #include <utility>
 #include <type_traits>
 #include <vector>
@@ -29,6 +31,12 @@ class CellBins {
 
   /// `block_width` cells per block and axis (block_width_for).
   CellBins(std::array<int, Dim> cells, std::array<double, Dim> length, int block_width);
+
+  /// Single cells of `layout`'s grid, ranked in the order layout.for_each_cell_by_block visits them instead of by
+  /// colour, for per-cell work over particles that lie in `layout`'s order: the visit then reads this order() and
+  /// the particle columns front to back. (With colour-major single cells, a TLS rebuild stalled on loading its
+  /// own order(), whose cells it met in another order.) Such bins have no colour classes: no coloured loops.
+  static CellBins single_cells_in_order_of(const CellBins& layout);
 
   /// Stable counting sort of the particles by block, colour-major. Positions outside the grid are binned into
   /// the nearest cell (the run's guards report them).
@@ -55,6 +63,7 @@ class CellBins {
   /// colour, blocks of one colour in parallel. Block indices run over [0, blocks()).
   template <class F>
   void for_each_block_coloured(F&& f) const {
+    if (!coloured_) throw std::logic_error("CellBins: these bins have no colour classes");
     for (int c = 0; c < (1 << Dim); ++c)
       tbb::parallel_for(tbb::blocked_range<std::size_t>(colour_begin_[c], colour_begin_[c + 1], 1),
                         [&](const tbb::blocked_range<std::size_t>& r) {
@@ -68,6 +77,18 @@ class CellBins {
                         });
   }
 
+  /// Calls f(cell) for every cell (row-major index), blocks in parallel in their rank order, the cells of a block
+  /// one after another: the order in which the particle columns lie after a reordering by these bins, so per-cell
+  /// work that reads the particles of each cell (the TLS sums) streams through them instead of jumping between
+  /// the colour classes, as a row-major sweep of the cells does. Not coloured: f may write only its cell's data.
+  template <class F>
+  void for_each_cell_by_block(F&& f) const {
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_of_rank_.size(), 4),
+                      [&](const tbb::blocked_range<std::size_t>& r) {
+                        for (std::size_t k = r.begin(); k < r.end(); ++k) for_each_cell_of_block(block_of_rank_[k], f);
+                      });
+  }
+
   /// Calls f(begin, end) for every block's range in a fixed serial order (the reference for the scatter).
   template <class F>
   void for_each_block_serial(F&& f) const {
@@ -76,16 +97,33 @@ class CellBins {
   }
 
  private:
+  /// f(cell) for the cells of a block (row-major block index), row-major.
+  template <class F>
+  void for_each_cell_of_block(std::size_t block, F&& f) const {
+    std::array<int, Dim> lo, hi;
+    for (int d = 0; d < Dim; ++d) {
+      lo[d] = static_cast<int>(block % nblocks_[d]) * block_width_;
+      hi[d] = std::min(lo[d] + block_width_, cells_[d]);
+      block /= nblocks_[d];
+    }
+    const int j_lo = Dim > 1 ? lo[Dim - 1] : 0, j_hi = Dim > 1 ? hi[Dim - 1] : 1;
+    for (int j = j_lo; j < j_hi; ++j)
+      for (int i = lo[0]; i < hi[0]; ++i)
+        f(static_cast<std::size_t>(i) + (Dim > 1 ? static_cast<std::size_t>(j) * cells_[0] : 0));
+  }
+
   std::array<int, Dim> cells_;
   std::array<double, Dim> inv_h_;
   std::array<int, Dim> nblocks_;
   int block_width_;
   std::vector<unsigned> rank_;          ///< colour-major rank of each block (row-major block index)
+  std::vector<unsigned> block_of_rank_;  ///< the inverse: row-major index of the block of each rank
   std::array<std::size_t, (1 << Dim) + 1> colour_begin_{};
   std::vector<std::size_t> block_begin_;  ///< by rank, size blocks+1
   std::vector<unsigned> key_;           ///< block rank per particle
   std::vector<unsigned> order_;
   std::vector<std::size_t> counts_;     ///< per chunk and rank
+  bool coloured_ = true;                ///< ranks are colour-major (false: single_cells_in_order_of)
 };
 
 extern template class CellBins<1>;

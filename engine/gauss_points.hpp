@@ -72,11 +72,12 @@ class GaussPoints {
   explicit GaussPoints(const Scene& scene);
 
   /// Reconstructs at the Gauss points of every cell that holds particles: ρ and ρv always (TLS: conservative),
-  /// σ and ρb when `stress` is set. `particles_by_cell` must bin the particles by single cells (block width 1).
+  /// σ and ρb when `stress` is set. `particles_by_cell` must bin the particles by single cells (block width 1);
+  /// `layout`: the bins whose block order the particle columns follow (TLS visits the cells in that order).
   /// Returns the particle momentum Σ m_p v_p, Σ m_p |v_p| (for the conservation check).
   template <class Body>
-  MomentumTotals<Dim> rebuild(const ParticleView<Dim>& p, const CellBins<Dim>& particles_by_cell, const Body& body,
-                              bool stress);
+  MomentumTotals<Dim> rebuild(const ParticleView<Dim>& p, const CellBins<Dim>& particles_by_cell,
+                              const CellBins<Dim>& layout, const Body& body, bool stress);
 
   /// The momentum again after rebuild(…, stress = true), when the particles' velocities are all that changed
   /// since (the second P2G of MUSL: positions, J and masses as in that rebuild). TLS keeps that rebuild's density
@@ -85,7 +86,7 @@ class GaussPoints {
   /// rebuild as usual.
   template <class Body>
   MomentumTotals<Dim> rebuild_momentum(const ParticleView<Dim>& p, const CellBins<Dim>& particles_by_cell,
-                                       const Body& body);
+                                       const CellBins<Dim>& layout, const Body& body);
 
   GaussView<Dim> view() const;
   /// The Gauss points as mass carriers, for the consistent-mass operator M_ij = Σ_g φ_i ρ̂ω φ_j (thesis eq. 3.9).
@@ -104,7 +105,8 @@ class GaussPoints {
  private:
   /// TLS; σ and ρb only when Stress; Reuse: the momentum only, from what the last rebuild kept (rebuild_momentum).
   template <int Degree, bool Stress, bool Reuse, class Body>
-  MomentumTotals<Dim> rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body);
+  MomentumTotals<Dim> rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const CellBins<Dim>& layout,
+                                  const Body& body);
   template <class Body>
   MomentumTotals<Dim> rebuild_mls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body,
                                   bool stress);
@@ -262,11 +264,12 @@ struct ParticleRanges {
 template <int Dim>
 template <class Body>
 MomentumTotals<Dim> GaussPoints<Dim>::rebuild(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
-                                              const Body& body, bool stress) {
+                                              const CellBins<Dim>& layout, const Body& body, bool stress) {
   if (mapping_ == Mapping::mls) return rebuild_mls(p, cells, body, stress);
   if (mapping_ == Mapping::cubic_spline) return rebuild_cubic_spline(p, cells, body, stress);
   auto tls = [&]<int Degree>() {
-    return stress ? rebuild_tls<Degree, true, false>(p, cells, body) : rebuild_tls<Degree, false, false>(p, cells, body);
+    return stress ? rebuild_tls<Degree, true, false>(p, cells, layout, body)
+                  : rebuild_tls<Degree, false, false>(p, cells, layout, body);
   };
   switch (tls_degree_) {
     case 0: return tls.template operator()<0>();
@@ -278,12 +281,12 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild(const ParticleView<Dim>& p, const 
 template <int Dim>
 template <class Body>
 MomentumTotals<Dim> GaussPoints<Dim>::rebuild_momentum(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
-                                                       const Body& body) {
-  if (mapping_ != Mapping::tls || !tls_kept_) return rebuild(p, cells, body, false);
+                                                       const CellBins<Dim>& layout, const Body& body) {
+  if (mapping_ != Mapping::tls || !tls_kept_) return rebuild(p, cells, layout, body, false);
   switch (tls_degree_) {
-    case 0: return rebuild_tls<0, false, true>(p, cells, body);
-    case 1: return rebuild_tls<1, false, true>(p, cells, body);
-    default: return rebuild_tls<2, false, true>(p, cells, body);
+    case 0: return rebuild_tls<0, false, true>(p, cells, layout, body);
+    case 1: return rebuild_tls<1, false, true>(p, cells, layout, body);
+    default: return rebuild_tls<2, false, true>(p, cells, layout, body);
   }
 }
 
@@ -320,21 +323,23 @@ namespace detail {
 /// exactly as the constraint set it. Without it, a fit through a few clustered particles of a strongly compressed
 /// cell extrapolates to wild (even negative) densities at the Gauss points, which is how 2D MPM–TLS diverges
 /// (thesis §6.3.1).
-template <int Dim, int K, class Fit>
-void limited_values(const Fit& fit, Eigen::Matrix<double, K, 1> lo, Eigen::Matrix<double, K, 1> hi,
-                    std::span<const Vec<Dim>> points, Eigen::Matrix<double, K, 1>* values) {
+/// `psi`: the Taylor basis at the Gauss points, the same in every cell's frame.
+template <int Dim, int Degree, int K>
+void limited_values(const TaylorFit<Dim, Degree, K>& fit, Eigen::Matrix<double, K, 1> lo,
+                    Eigen::Matrix<double, K, 1> hi, std::span<const TaylorVector<Dim, Degree>> psi,
+                    Eigen::Matrix<double, K, 1>* values) {
   const Eigen::Matrix<double, K, 1> mean = fit.c.row(0).transpose();
   lo = lo.cwiseMin(mean);
   hi = hi.cwiseMax(mean);
   Eigen::Matrix<double, K, 1> alpha = Eigen::Matrix<double, K, 1>::Ones();
-  fit.evaluate(points, values);
-  for (std::size_t g = 0; g < points.size(); ++g)
+  for (std::size_t g = 0; g < psi.size(); ++g) values[g] = fit.c.transpose() * psi[g];
+  for (std::size_t g = 0; g < psi.size(); ++g)
     for (int k = 0; k < K; ++k) {
       const double dev = values[g][k] - mean[k];
       if (dev > 0) alpha[k] = std::min(alpha[k], (hi[k] - mean[k]) / dev);
       if (dev < 0) alpha[k] = std::min(alpha[k], (lo[k] - mean[k]) / dev);
     }
-  for (std::size_t g = 0; g < points.size(); ++g) values[g] = mean + alpha.cwiseProduct(values[g] - mean);
+  for (std::size_t g = 0; g < psi.size(); ++g) values[g] = mean + alpha.cwiseProduct(values[g] - mean);
 }
 
 /// What a TLS rebuild sums per cell over the cell's own particles, in the cell's Taylor frame, in its first pass:
@@ -342,6 +347,8 @@ void limited_values(const Fit& fit, Eigen::Matrix<double, K, 1> lo, Eigen::Matri
 /// the limiter, and the cell's mass and momentum for the constraints.
 template <int Dim, int Degree, int K>
 struct TlsCellSums {
+  CellBox<Dim> box;         ///< the TLS cell (1D: clipped to the body)
+  TaylorFrame<Dim> frame;   ///< its Taylor frame, in which the sums are taken
   TaylorNormalSystem<Dim, Degree, K> sys;
   /// Fields 1.. (the unconstrained fits) of this cell and its two neighbours along axis 0, in this cell's frame:
   /// the first half of a separable 3×3 (1D: 3) neighbourhood sum.
@@ -377,7 +384,7 @@ struct TlsKeptFit {
 template <int Dim>
 template <int Degree, bool Stress, bool Reuse, class Body>
 MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
-                                                  const Body& body) {
+                                                  const CellBins<Dim>& layout, const Body& body) {
   static_assert(!(Stress && Reuse), "a momentum-only rebuild has no stress");
   constexpr int KS = Stress ? sym_components<Dim> + Dim : 0;  // σ, ρb
   constexpr int KF = Dim + KS;                                 // the unconstrained fits: v | σ, ρb
@@ -406,7 +413,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     return box;
   };
 
-  // Pass 1: each particle is read once, into the sums of its cell. The neighbourhood fits of pass 3 move the sums
+  // Pass 1: each particle is read once, into the sums of its cell; the cells in the order of `layout`'s blocks,
+  // which the particle columns follow (a row-major sweep jumped between the colour classes of the blocks). The neighbourhood fits of pass 3 move the sums
   // of the neighbouring cells into their own frame (TaylorChange) instead of revisiting those cells' particles,
   // separably: pass 2 sums each cell's row of three along axis 0, pass 3 the rows of three along axis 1, four
   // one-axis moves per cell instead of eight general ones. With 2×2 particles per cell, where every velocity and
@@ -414,13 +422,15 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
   // from 5570 to 2400 instructions per particle (callgrind; docs/RECONSTRUCTION.md). Neighbours weigh as much as
   // own particles here (TlsOptions::neighbour_weight = 1, the thesis' choice): a separable sum cannot weigh them
   // apart.
-  for_each_cell(ncells, [&](std::size_t c) {
+  layout.for_each_cell_by_block([&](std::size_t c) {
     const auto [begin, end] = cells.block_range(c);
     Sums& cs = sums[c];
     cs = Sums{};
+    cs.box = tls_box(c);
+    cs.frame = TaylorFrame<Dim>(cs.box);
     totals[c] = MomentumTotals<Dim>{};
     if (begin == end) return;
-    const TaylorFrame<Dim> frame(tls_box(c));
+    const TaylorFrame<Dim> frame = cs.frame;
     Values lo = cs.lo, hi = cs.hi;  // locals while the particles stream in (see add_samples)
     double mass = 0.0;
     Eigen::Matrix<double, Dim, 1> momentum = Eigen::Matrix<double, Dim, 1>::Zero();
@@ -459,12 +469,20 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     totals[c] = total;
   });
 
-  auto frame_of = [&](std::size_t c) { return TaylorFrame<Dim>(tls_box(c)); };
+  auto frame_of = [&](std::size_t c) -> const TaylorFrame<Dim>& { return sums[c].frame; };
+  // The Gauss points sit at the same place of every TLS cell (1D: of its occupied part): ξ = 2 local − 1.
+  std::array<TaylorVector<Dim, Degree>, max_per_cell> psi_buffer;
+  for (int g = 0; g < per_cell_; ++g) {
+    Vec<Dim> xi;
+    for (int d = 0; d < Dim; ++d) xi[d] = 2.0 * local_[g][d] - 1.0;
+    psi_buffer[g] = taylor_basis_ref<Dim, Degree>(xi);
+  }
+  const std::span<const TaylorVector<Dim, Degree>> psi(psi_buffer.data(), per_cell_);
   // Pass 2: row sums, for every cell (a cell without particles may still join its neighbours' sums).
   for_each_cell(ncells, [&](std::size_t c) {
     Sums& cs = sums[c];
     cs.row = cs.template fields<1, KF>();
-    const TaylorFrame<Dim> frame = frame_of(c);
+    const TaylorFrame<Dim>& frame = cs.frame;
     for_each_neighbour_along(c, 0, [&](std::size_t n) {
       const auto& ns = sums[n].sys;
       cs.row.add_moved(ns.D, ns.b.template rightCols<KF>(), ns.shift.template tail<KF>(), ns.points,
@@ -481,18 +499,13 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
       for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
       return;
     }
-    const CellBox<Dim> box = tls_box(c);
+    const CellBox<Dim>& box = cs.box;
     if constexpr (Dim == 1) {  // the occupied part of the cell: its Gauss points move there
       const CellBox<Dim> whole = cell_box(c);
       double w[16];            // ≤ 10 points per cell (scene range of gauss_per_cell)
       place_clipped(first, cell_rule_, whole.lo[0], whole.hi[0], extent.lo, extent.hi, w);
     }
     const double volume = box.volume();
-    // per-cell buffers on the stack: no allocation per cell and rebuild
-    std::array<Vec<Dim>, max_per_cell> point_buffer;
-    const std::span<const Vec<Dim>> points(point_buffer.data(), per_cell_);
-    for (int g = 0; g < per_cell_; ++g)
-      for (int d = 0; d < Dim; ++d) point_buffer[g][d] = x_[d][first + g];
 
     // The density fit uses the cell's own particles only: completing it from the neighbouring cells (thesis
     // §5.2.3) was measured to bias the slopes of compressed cells (plate, A = 0.1: 64-cell error 2.4x larger);
@@ -506,8 +519,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
           detail::complete_fit<Degree>(box, rho_sys, true, [](auto&) { return false; }, TlsOptions{});
       kept[c].rho = rho_fit.status;
       std::array<Eigen::Matrix<double, 1, 1>, max_per_cell> rho;
-      detail::limited_values<Dim, 1>(rho_fit, cs.lo.template head<1>().eval(), cs.hi.template head<1>().eval(),
-                                     points, rho.data());
+      detail::limited_values(rho_fit, cs.lo.template head<1>().eval(), cs.hi.template head<1>().eval(), psi,
+                             rho.data());
       for (int g = 0; g < per_cell_; ++g) m_[first + g] = local_w_[g] * volume * rho[g][0];
     }
     counts[c].add(kept[c].rho);
@@ -523,7 +536,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     constexpr double own_fit_pivot = 1e-3;
     TlsOptions opt;
     opt.rank_threshold = own_fit_pivot;
-    const TaylorFrame<Dim> frame(box);
+    const TaylorFrame<Dim>& frame = cs.frame;
     auto add_neighbours = [&](FitSystem& sys) {  // own + neighbours: the rows above and below moved to this one
       sys = cs.row;
       if constexpr (Dim == 2)
@@ -545,8 +558,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
     counts[c].add(fit.status);
     std::array<FitValues, max_per_cell> values;
-    detail::limited_values<Dim, KF>(fit, cs.lo.template tail<KF>().eval(), cs.hi.template tail<KF>().eval(), points,
-                                    values.data());
+    detail::limited_values(fit, cs.lo.template tail<KF>().eval(), cs.hi.template tail<KF>().eval(), psi,
+                           values.data());
 
     // Momentum as ρ̂ v̂, not a fit of ρv (beyond the thesis, which fits ρv, eq. 5.9): v̂ is bounded by the cell's
     // particle velocities, so a nodal velocity Σφρ̂v̂ω / Σφρ̂ω is a weighted mean of bounded values even where the

@@ -318,13 +318,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
 
   if (scene.algorithm.mapping != Mapping::direct) {
     gauss_.emplace(scene);
-    std::array<int, Dim> c;
-    std::array<double, Dim> l;
-    for (int d = 0; d < Dim; ++d) {
-      c[d] = scene.grid.cells[d];
-      l[d] = scene.grid.length[d];
-    }
-    particle_cells_.emplace(c, l, 1);
+    particle_cells_.emplace(CellBins<Dim>::single_cells_in_order_of(bins_));
   }
   pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force());
   if (problem_->has_point_loads())
@@ -569,8 +563,8 @@ double Simulation<Dim>::step_with(const B& basis, const M& material, const F& bo
   auto scatter = [&]<ScatterFields Fields>(bool only_velocities_changed = false) {
     if (gauss_) {
       const MomentumTotals<Dim> totals = only_velocities_changed
-                                             ? gauss_->rebuild_momentum(pv, *particle_cells_, body)
-                                             : gauss_->rebuild(pv, *particle_cells_, body, Fields.force);
+                                             ? gauss_->rebuild_momentum(pv, *particle_cells_, bins_, body)
+                                             : gauss_->rebuild(pv, *particle_cells_, bins_, body, Fields.force);
       const auto gp = gauss_->view();
       const unsigned* gorder = gauss_->bins().order().data();
       gauss_->bins().for_each_block_coloured([&](std::size_t b, std::size_t e) {

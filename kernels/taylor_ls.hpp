@@ -14,6 +14,7 @@
 //
 // Coefficient index k = 0..N−1 here is the thesis' ψ_{k+1}. Bases are hierarchical: degree d uses the first
 // taylor_size(d) functions of degree d+1, so a lower-degree fit is a leading block of the same normal system.
+#include <array>
 #include <cstddef>
 
 #include "kernels/reconstruction.hpp"
@@ -34,10 +35,12 @@ using TaylorVector = Eigen::Matrix<double, taylor_size<Dim>(Degree), 1>;
 ///   1D (thesis §5.2.2):  ψ = [1, ξ, ξ²/2 − 1/6]
 ///   2D (thesis eqs 6.1–6.6, 6.8–6.13 on a rectangle):  ψ = [1, ξ₁, ξ₂, ξ₁²/2 − 1/6, ξ₂²/2 − 1/6, ξ₁ξ₂]
 /// The subtracted constants are the cell averages: mean of ξ²/2 over [−1, 1] is 1/6, of ξ₁ξ₂ over the square 0.
+/// As plain scalars (taylor_basis_ref gives the same as a vector): for loops that broadcast each ψ_k, where an
+/// Eigen vector assembled from scalar stores and reloaded as a packet stalled on store forwarding.
 template <int Dim, int Degree>
-inline TaylorVector<Dim, Degree> taylor_basis_ref(const Vec<Dim>& xi) {
+inline std::array<double, taylor_size<Dim>(Degree)> taylor_basis_values(const Vec<Dim>& xi) {
   static_assert(Degree >= 0 && Degree <= 2, "Taylor degree 0, 1 or 2");
-  TaylorVector<Dim, Degree> psi;
+  std::array<double, taylor_size<Dim>(Degree)> psi;
   psi[0] = 1.0;                                                          // ψ_1, eq. 6.1
   if constexpr (Dim == 1) {
     if constexpr (Degree >= 1) psi[1] = xi[0];                           // ψ_2
@@ -56,10 +59,17 @@ inline TaylorVector<Dim, Degree> taylor_basis_ref(const Vec<Dim>& xi) {
   return psi;
 }
 
+template <int Dim, int Degree>
+inline TaylorVector<Dim, Degree> taylor_basis_ref(const Vec<Dim>& xi) {
+  const auto psi = taylor_basis_values<Dim, Degree>(xi);
+  return Eigen::Map<const TaylorVector<Dim, Degree>>(psi.data());
+}
+
 /// Centre and inverse half width of a cell: the map x ↦ ξ of the Taylor basis.
 template <int Dim>
 struct TaylorFrame {
   Vec<Dim> centre, inv_half;
+  TaylorFrame() = default;
   explicit TaylorFrame(const CellBox<Dim>& cell)
       : centre(cell.centre()), inv_half(cell.half_width().cwiseInverse()) {}
   Vec<Dim> xi(const Vec<Dim>& x) const { return (x - centre).cwiseProduct(inv_half); }
@@ -222,12 +232,11 @@ struct TaylorNormalSystem {
         s = f;
         have_shift = true;
       }
-      const TaylorVector<Dim, Degree> wpsi = w * taylor_basis_ref<Dim, Degree>(xi);
-      const TaylorVector<Dim, Degree> psi = taylor_basis_ref<Dim, Degree>(xi);
+      const auto psi = taylor_basis_values<Dim, Degree>(xi);
       const Eigen::Matrix<double, K, 1> g = f - s;
-      for (int k = 0; k < N; ++k) bt.col(k) += wpsi[k] * g;
+      for (int k = 0; k < N; ++k) bt.col(k) += (w * psi[k]) * g;
       for (int i = 0; i < N; ++i)
-        for (int j = 0; j <= i; ++j) lower(i, j) += wpsi[i] * psi[j];
+        for (int j = 0; j <= i; ++j) lower(i, j) += (w * psi[i]) * psi[j];
     });
     for (int i = 0; i < N; ++i)
       for (int j = 0; j < i; ++j) lower(j, i) = lower(i, j);

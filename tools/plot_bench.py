@@ -332,7 +332,8 @@ def section_stream(lines, res):
     lines.append("")
     lines.append("STREAM-like kernels on 3 × 1 GiB arrays; *STREAM GB/s* counts the bytes the kernel names "
                  "(triad: 24 B/element), *DRAM GB/s* adds the write-allocate read of the written array "
-                 "(triad: 32 B/element). FMA peak: 512-bit FMAs, 16 independent chains per thread.")
+                 "(triad: 32 B/element). FMA peak: 512-bit FMAs, 16 independent chains per thread (fma_avx512), or "
+                 "256-bit FMAs, 12 chains (fma_avx2); the one the CPU lacks reports no value.")
     lines.append("")
     lines.append("| kernel | threads | STREAM GB/s | DRAM GB/s (with write-allocate) | GFLOP/s | cv % |")
     lines.append("|---|---:|---:|---:|---:|---:|")
