@@ -19,7 +19,7 @@ using Vec = Eigen::Matrix<double, Dim, 1>;
 /// An axis-aligned cell [lo, hi] (a knot span of the grid).
 template <int Dim>
 struct CellBox {
-  Vec<Dim> lo, hi;
+  Vec<Dim> lo = Vec<Dim>::Zero(), hi = Vec<Dim>::Zero();
   Vec<Dim> centre() const { return 0.5 * (lo + hi); }
   Vec<Dim> half_width() const { return 0.5 * (hi - lo); }  ///< Δx_k of thesis §5.2.2 / §6.1.1
   double volume() const { return (hi - lo).prod(); }      ///< |Ω_e|, thesis eq. 6.7

@@ -68,7 +68,7 @@ inline TaylorVector<Dim, Degree> taylor_basis_ref(const Vec<Dim>& xi) {
 /// Centre and inverse half width of a cell: the map x ↦ ξ of the Taylor basis.
 template <int Dim>
 struct TaylorFrame {
-  Vec<Dim> centre, inv_half;
+  Vec<Dim> centre = Vec<Dim>::Zero(), inv_half = Vec<Dim>::Zero();
   TaylorFrame() = default;
   explicit TaylorFrame(const CellBox<Dim>& cell)
       : centre(cell.centre()), inv_half(cell.half_width().cwiseInverse()) {}

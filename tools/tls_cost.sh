@@ -1,0 +1,55 @@
+#!/usr/bin/env bash
+# The cost of the TLS reconstruction against direct mapping, side by side: `mpm run` on the benchmark block
+# (tools/scenes/block-1e6.json: neo-Hookean, lumped mass, quadratic B-splines, MUSL) with 2x2 and 3x3 particles
+# per cell at ~1e6 particles, direct and TLS alternated in every repetition so that both see the same host load.
+# Prints a Markdown table of the medians of the summaries' particle_steps_per_s (time stepping only) and the
+# ratio TLS / direct.
+#
+# Usage: tools/tls_cost.sh [--mpm BINARY] [--reps N] [--threads T] [--steps S]
+#   defaults: build/tools/mpm, 3 repetitions, 2 threads, 32 steps (dt = 1e-5)
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+mpm="$root/build/tools/mpm"
+reps=3
+threads=2
+steps=32
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --mpm) mpm=$(realpath "$2"); shift 2 ;;
+    --reps) reps="$2"; shift 2 ;;
+    --threads) threads="$2"; shift 2 ;;
+    --steps) steps="$2"; shift 2 ;;
+    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
+    *) echo "tls_cost.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
+  esac
+done
+[[ -x "$mpm" ]] || { echo "tls_cost.sh: no mpm binary at $mpm (build first, or pass --mpm)" >&2; exit 2; }
+end=$(python3 -c "print($steps * 1e-5)")
+summary=$(mktemp)
+trap 'rm -f "$summary"' EXIT
+# layout (particles per cell) and cells per axis for ~1e6 particles
+configs=("[2,2] [500,500]" "[3,3] [333,333]")
+for ((r = 1; r <= reps; ++r)); do
+  for cfg in "${configs[@]}"; do
+    read -r ppc cells <<< "$cfg"
+    for mapping in direct tls; do
+      "$mpm" run "$root/tools/scenes/block-1e6.json" --set algorithm.update='"musl"' \
+        --set algorithm.mapping="\"$mapping\"" --set particles.per_cell="$ppc" --set grid.cells="$cells" \
+        --set time.end="$end" --threads "$threads" --quiet --summary "$summary" > /dev/null
+      echo "$ppc $mapping $(python3 -c "import json, sys; print(json.load(open(sys.argv[1]))['particle_steps_per_s'])" "$summary")"
+    done
+  done
+done | python3 -c "
+import collections, statistics, sys
+runs = collections.defaultdict(list)
+for line in sys.stdin:
+    ppc, mapping, rate = line.split()
+    runs[(ppc, mapping)].append(float(rate))
+print('| particles per cell | direct, particle-steps/s | TLS, particle-steps/s | TLS / direct | runs |')
+print('|---|---:|---:|---:|---:|')
+for ppc in sorted({k[0] for k in runs}):
+    d, t = statistics.median(runs[(ppc, 'direct')]), statistics.median(runs[(ppc, 'tls')])
+    print(f'| {ppc} | {d / 1e6:.2f} M | {t / 1e6:.2f} M | {t / d:.2f} | {len(runs[(ppc, \"tls\")])} |')
+"
+echo
+echo "mpm: $mpm; $threads threads; $steps MUSL steps per run; $(nproc) CPUs: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2 | xargs); $(date -u +%Y-%m-%dT%H:%MZ)"
