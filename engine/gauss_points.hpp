@@ -422,7 +422,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
   // from 5570 to 2400 instructions per particle (callgrind; docs/RECONSTRUCTION.md). Neighbours weigh as much as
   // own particles here (TlsOptions::neighbour_weight = 1, the thesis' choice): a separable sum cannot weigh them
   // apart.
-  layout.for_each_cell_by_block([&](std::size_t c) {
+  // (the view by value: through the reference GCC reloaded every column pointer after each store to the sums)
+  layout.for_each_cell_by_block([&, p = p](std::size_t c) {
     const auto [begin, end] = cells.block_range(c);
     Sums& cs = sums[c];
     cs = Sums{};
@@ -433,8 +434,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     const TaylorFrame<Dim> frame = cs.frame;
     Values lo = cs.lo, hi = cs.hi;  // locals while the particles stream in (see add_samples)
     double mass = 0.0;
-    Eigen::Matrix<double, Dim, 1> momentum = Eigen::Matrix<double, Dim, 1>::Zero();
-    MomentumTotals<Dim> total;
+    MomentumTotals<Dim> total;  // Σ m v (the momentum constraint) and Σ m |v|
     cs.sys.add_samples([&](auto&& add_one) {
       for (std::size_t k = begin; k < end; ++k) {
         const std::size_t ip = order[k];
@@ -457,7 +457,6 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
         lo = lo.cwiseMin(f);
         hi = hi.cwiseMax(f);
         mass += p.m[ip];
-        for (int d = 0; d < Dim; ++d) momentum[d] += p.m[ip] * v[d];
         total.add(p.m[ip], v);
       }
     });
@@ -465,7 +464,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     cs.lo = lo;
     cs.hi = hi;
     cs.mass = mass;
-    cs.momentum = momentum;
+    for (int d = 0; d < Dim; ++d) cs.momentum[d] = total.mv[d];
     totals[c] = total;
   });
 
