@@ -4,7 +4,9 @@
 // Sizes: 2D 1e3 ... 1e7 (cells = sqrt(N/4) per axis), 1D 1e3 ... 4e6 (2^20 cells is the scene's limit).
 //
 //   step/<dim>d/<scheme>/n:<N>/threads:<T>     scheme: usl, musl (direct mapping), musl-tls (TLS reconstruction),
-//                                              usl-generic (USL with the Cox–de Boor weights: grid.basis_path generic)
+//                                              usl-generic (USL with the Cox–de Boor weights: grid.basis_path generic),
+//                                              musl-9ppc, musl-tls-9ppc (2D, 3x3 particles per cell, the plate's
+//                                              layout: TLS fits most cells from their own particles there)
 //
 // Counter particle_steps_per_s = particles x steps / wall time. Set-up (scene parsing, seeding, the first-touch
 // of every array) is outside the timed loop. A Simulation is reused by consecutive benchmarks with the same
@@ -29,16 +31,20 @@ namespace {
 constexpr long kPeriod = 16;              // engine/simulation_impl.hpp: reorder_every
 constexpr std::size_t kLarge = 5'000'000;  // from here: one period per run, one repetition, no warm-up
 
-/// The headline scene; `n` nominal particles, 4 per cell.
+/// Particles per cell and axis in 2D: 3 for the *-9ppc schemes, else 2.
+int per_axis_2d(const std::string& scheme) { return scheme.ends_with("-9ppc") ? 3 : 2; }
+
+/// The headline scene; `n` nominal particles, 4 per cell (9 for the *-9ppc schemes).
 nlohmann::json scene_json(int dim, std::int64_t n, const std::string& scheme) {
   nlohmann::json material{{"model", "neo-hookean"}, {"E", 1e6}, {"nu", 0.3}, {"density", 1000}};
   const std::string path = scheme == "usl-generic" ? "generic" : "fast";
   nlohmann::json j;
   if (dim == 2) {
-    const int cells = mpm_bench::cells_for_2d(n);
+    const int per_axis = per_axis_2d(scheme);
+    const int cells = mpm_bench::cells_for_2d(n, per_axis);
     j = {{"dimension", 2},
          {"grid", {{"length", {1, 1}}, {"cells", {cells, cells}}, {"basis", "bspline2"}, {"basis_path", path}}},
-         {"particles", {{"per_cell", {2, 2}}}},
+         {"particles", {{"per_cell", {per_axis, per_axis}}}},
          {"bodies", {{{"box", {{0, 0}, {1, 1}}}, {"velocity", {0.1, 0.05}}}}},
          {"fixed", {"x-", "x+", "y-", "y+"}}};
   } else {
@@ -51,8 +57,8 @@ nlohmann::json scene_json(int dim, std::int64_t n, const std::string& scheme) {
   }
   j["material"] = material;
   // "musl-tls": MUSL with the TLS reconstruction (Gauss-point P2G), against the direct mapping of "musl"
-  const bool tls = scheme == "musl-tls";
-  const std::string update = tls ? "musl" : scheme == "usl-generic" ? "usl" : scheme;
+  const bool tls = scheme.starts_with("musl-tls");
+  const std::string update = scheme.starts_with("musl") ? "musl" : "usl";
   j["algorithm"] = {{"update", update}, {"mass", "lumped"}, {"mapping", tls ? "tls" : "direct"}};
   j["time"] = {{"cfl", 0.2}, {"end", 1000.0}};  // never reached within a benchmark
   return j;
@@ -111,10 +117,11 @@ void BM_Step(benchmark::State& state, const std::string& scheme) {
   }
 }
 
-std::size_t particles_of(int dim, std::int64_t nominal) {
+std::size_t particles_of(int dim, std::int64_t nominal, const std::string& scheme) {
   if (dim == 2) {
-    const std::size_t c = mpm_bench::cells_for_2d(nominal);
-    return 4 * c * c;
+    const std::size_t per_axis = per_axis_2d(scheme);
+    const std::size_t c = mpm_bench::cells_for_2d(nominal, static_cast<int>(per_axis));
+    return per_axis * per_axis * c * c;
   }
   return 4 * static_cast<std::size_t>(std::max<std::int64_t>(1, nominal / 4));
 }
@@ -124,22 +131,24 @@ const bool registered = [] {
   const std::vector<std::int64_t> sizes_1d{1'000, 10'000, 100'000, 1'000'000, 4'000'000};
   const std::vector<std::int64_t> sizes_2d{1'000, 10'000, 100'000, 1'000'000, 10'000'000};
   for (int dim : {1, 2})
-    for (const char* scheme : {"usl", "musl", "musl-tls", "usl-generic"})
+    for (const std::string scheme : {"usl", "musl", "musl-tls", "usl-generic", "musl-9ppc", "musl-tls-9ppc"})
       for (std::int64_t n : dim == 1 ? sizes_1d : sizes_2d) {
-        if (std::string(scheme) == "musl-tls" && n > 1'000'000) continue;  // ~10x the direct cost per step
-        // the whole-step cost of the generic weights, beside the fast path's (2D, 1e5 and 1e6)
-        if (std::string(scheme) == "usl-generic" && (dim == 1 || n < 100'000 || n > 1'000'000)) continue;
+        if (scheme.starts_with("musl-tls") && n > 1'000'000) continue;  // several direct steps per step
+        // the whole-step cost of the generic weights beside the fast path's, and the 9-per-cell pair
+        // (2D, 1e5 and 1e6)
+        if ((scheme == "usl-generic" || scheme.ends_with("-9ppc")) && (dim == 1 || n < 100'000 || n > 1'000'000))
+          continue;
         const std::string name = "step/" + std::to_string(dim) + "d/" + scheme;
         auto fn = dim == 1 ? BM_Step<1> : BM_Step<2>;
-        auto* b = benchmark::RegisterBenchmark(name.c_str(), fn, std::string(scheme))
+        auto* b = benchmark::RegisterBenchmark(name.c_str(), fn, scheme)
                       ->Args({n, 1})
                       ->Args({n, 2})
                       ->ArgNames({"n", "threads"})
-                      ->Iterations(timed_steps(particles_of(dim, n)))
+                      ->Iterations(timed_steps(particles_of(dim, n, scheme)))
                       ->UseRealTime()
                       ->Unit(benchmark::kMillisecond);
         // 1e7 particles: ~1 s per 2D step; one 16-step run per thread count keeps the suite within minutes
-        if (particles_of(dim, n) >= kLarge) b->Repetitions(1);
+        if (particles_of(dim, n, scheme) >= kLarge) b->Repetitions(1);
       }
   return true;
 }();

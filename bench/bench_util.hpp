@@ -23,9 +23,11 @@ inline tbb::global_control limit_threads(int n) {
   return tbb::global_control(tbb::global_control::max_allowed_parallelism, static_cast<std::size_t>(n));
 }
 
-/// Number of particles and cells of a nominal particle count: 2x2 particles per cell on an n x n grid.
-inline int cells_for_2d(std::int64_t particles) {
-  return std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(particles) / 4.0))));
+/// Cells per axis for a nominal particle count: `per_axis` x `per_axis` particles per cell (default 2x2) on an
+/// n x n grid.
+inline int cells_for_2d(std::int64_t particles, int per_axis = 2) {
+  const double per_cell = static_cast<double>(per_axis) * per_axis;
+  return std::max(1, static_cast<int>(std::lround(std::sqrt(static_cast<double>(particles) / per_cell))));
 }
 
 /// Grid arrays of one 2D field set (the GridState of the engine without the fixed flags).
