@@ -414,15 +414,15 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
   };
 
   // Pass 1: each particle is read once, into the sums of its cell; the cells in the order of `layout`'s blocks,
-  // which the particle columns follow (a row-major sweep jumped between the colour classes of the blocks). The neighbourhood fits of pass 3 move the sums
-  // of the neighbouring cells into their own frame (TaylorChange) instead of revisiting those cells' particles,
-  // separably: pass 2 sums each cell's row of three along axis 0, pass 3 the rows of three along axis 1, four
-  // one-axis moves per cell instead of eight general ones. With 2×2 particles per cell, where every velocity and
-  // stress fit needs the 3×3 neighbourhood, this and the fixed-size solve cut the two rebuilds of a MUSL step
-  // from 5570 to 2400 instructions per particle (callgrind; docs/RECONSTRUCTION.md). Neighbours weigh as much as
-  // own particles here (TlsOptions::neighbour_weight = 1, the thesis' choice): a separable sum cannot weigh them
-  // apart.
-  // (the view by value: through the reference GCC reloaded every column pointer after each store to the sums)
+  // which the particle columns follow (a row-major sweep jumped between the colour classes of the blocks). The
+  // neighbourhood fits of pass 3 move the sums of the neighbouring cells into their own frame (TaylorChange)
+  // instead of revisiting those cells' particles, separably: pass 2 sums each cell's row of three along axis 0,
+  // pass 3 the rows of three along axis 1, four one-axis moves per cell instead of eight general ones. With 2×2
+  // particles per cell, where every velocity and stress fit needs the 3×3 neighbourhood, this and the fixed-size
+  // solve cut the two rebuilds of a MUSL step from 5570 to 2400 instructions per particle (callgrind;
+  // docs/RECONSTRUCTION.md). Neighbours weigh as much as own particles here (TlsOptions::neighbour_weight = 1, the
+  // thesis' choice): a separable sum cannot weigh them apart. The view is captured by value: through the
+  // reference GCC reloaded every column pointer after each store to the sums.
   layout.for_each_cell_by_block([&, p = p](std::size_t c) {
     const auto [begin, end] = cells.block_range(c);
     Sums& cs = sums[c];
