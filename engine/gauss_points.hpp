@@ -424,7 +424,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
   // thesis' choice): a separable sum cannot weigh them apart. The view is captured by value: through the
   // reference GCC reloaded every column pointer after each store to the sums.
   layout.for_each_cell_by_block([&, p = p](std::size_t c) {
-    const auto [begin, end] = cells.block_range(c);
+    const auto range = cells.block_range(c);  // (clang 14 cannot capture structured bindings)
+    const std::size_t begin = range.first, end = range.second;
     Sums& cs = sums[c];
     cs = Sums{};
     cs.box = tls_box(c);
