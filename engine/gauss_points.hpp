@@ -15,6 +15,7 @@
 // span (thesis §3.2.3, Fig. 3.4: two per half), restricted to the body's current extent. It is the thesis'
 // non-conservative comparison method: ∫ρ̂ and ∫ρv̂ differ from Σ m_p and Σ m_p v_p by the interpolation error.
 #include <array>
+#include <cstdint>
 #include <limits>
 #include <memory>
 #include <span>
@@ -66,23 +67,34 @@ inline void scatter_gauss(const TensorBasis<Dim, Axis>& basis, GaussView<Dim> gp
   }
 }
 
+/// What a TLS rebuild fits besides the density: the velocity (for a scatter of momentum), the stress and the body
+/// force (for a scatter of force). `reuse`: the velocity alone, the density and the normal matrices kept from the
+/// last rebuild (GaussPoints::rebuild_momentum). Fitting only what the next scatter reads: MUSL's first P2G
+/// scatters no momentum, and with no body force the ρb fits are zeros.
+struct TlsFields {
+  bool velocity = false;
+  bool stress = false;
+  bool reuse = false;
+};
+
 template <int Dim>
 class GaussPoints {
  public:
   explicit GaussPoints(const Scene& scene);
 
-  /// Reconstructs at the Gauss points of every cell that holds particles: ρ and ρv always (TLS: conservative),
-  /// σ and ρb when `stress` is set. `particles_by_cell` must bin the particles by single cells (block width 1);
-  /// `layout`: the bins whose block order the particle columns follow (TLS visits the cells in that order).
-  /// Returns the particle momentum Σ m_p v_p, Σ m_p |v_p| (for the conservation check).
+  /// Reconstructs at the Gauss points of every cell that holds particles: ρ always (TLS: conservative), ρv when
+  /// `momentum` or not `stress` (the scatter reads it), σ and ρb when `stress` is set. `particles_by_cell` must bin
+  /// the particles by single cells (block width 1); `layout`: the bins whose block order the particle columns
+  /// follow (TLS visits the cells in that order). Returns the particle momentum Σ m_p v_p, Σ m_p |v_p| (for the
+  /// conservation check) when ρv is reconstructed, else zero.
   template <class Body>
   MomentumTotals<Dim> rebuild(const ParticleView<Dim>& p, const CellBins<Dim>& particles_by_cell,
-                              const CellBins<Dim>& layout, const Body& body, bool stress);
+                              const CellBins<Dim>& layout, const Body& body, bool stress, bool momentum);
 
-  /// The momentum again after rebuild(…, stress = true), when the particles' velocities are all that changed
-  /// since (the second P2G of MUSL: positions, J and masses as in that rebuild). TLS keeps that rebuild's density
-  /// at the Gauss points, its density fallbacks and its neighbourhood normal matrices, and refits only the
-  /// velocity: the same numbers as rebuild(…, false), for about a third of its cost. MLS and the cubic spline
+  /// The momentum again after a rebuild, when the particles' velocities are all that changed since (the second
+  /// P2G of MUSL: positions, J and masses as in that rebuild). TLS keeps that rebuild's density at the Gauss
+  /// points, its density fallbacks and its own and neighbourhood normal matrices, and sums and fits only the
+  /// velocity: the same numbers as rebuild(…, false, true), for a fraction of its cost. MLS and the cubic spline
   /// rebuild as usual.
   template <class Body>
   MomentumTotals<Dim> rebuild_momentum(const ParticleView<Dim>& p, const CellBins<Dim>& particles_by_cell,
@@ -103,10 +115,13 @@ class GaussPoints {
   }
 
  private:
-  /// TLS; σ and ρb only when Stress; Reuse: the momentum only, from what the last rebuild kept (rebuild_momentum).
-  template <int Degree, bool Stress, bool Reuse, class Body>
+  /// TLS of the fields `Fit` names, at the scene's Taylor degree.
+  template <TlsFields Fit, class Body>
   MomentumTotals<Dim> rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const CellBins<Dim>& layout,
                                   const Body& body);
+  template <int Degree, TlsFields Fit, class Body>
+  MomentumTotals<Dim> rebuild_tls_of_degree(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
+                                            const CellBins<Dim>& layout, const Body& body);
   template <class Body>
   MomentumTotals<Dim> rebuild_mls(const ParticleView<Dim>& p, const CellBins<Dim>& cells, const Body& body,
                                   bool stress);
@@ -264,29 +279,31 @@ struct ParticleRanges {
 template <int Dim>
 template <class Body>
 MomentumTotals<Dim> GaussPoints<Dim>::rebuild(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
-                                              const CellBins<Dim>& layout, const Body& body, bool stress) {
+                                              const CellBins<Dim>& layout, const Body& body, bool stress,
+                                              bool momentum) {
   if (mapping_ == Mapping::mls) return rebuild_mls(p, cells, body, stress);
   if (mapping_ == Mapping::cubic_spline) return rebuild_cubic_spline(p, cells, body, stress);
-  auto tls = [&]<int Degree>() {
-    return stress ? rebuild_tls<Degree, true, false>(p, cells, layout, body)
-                  : rebuild_tls<Degree, false, false>(p, cells, layout, body);
-  };
-  switch (tls_degree_) {
-    case 0: return tls.template operator()<0>();
-    case 1: return tls.template operator()<1>();
-    default: return tls.template operator()<2>();
-  }
+  if (!stress) return rebuild_tls<TlsFields{.velocity = true}>(p, cells, layout, body);
+  if (momentum) return rebuild_tls<TlsFields{.velocity = true, .stress = true}>(p, cells, layout, body);
+  return rebuild_tls<TlsFields{.stress = true}>(p, cells, layout, body);
 }
 
 template <int Dim>
 template <class Body>
 MomentumTotals<Dim> GaussPoints<Dim>::rebuild_momentum(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
                                                        const CellBins<Dim>& layout, const Body& body) {
-  if (mapping_ != Mapping::tls || !tls_kept_) return rebuild(p, cells, layout, body, false);
+  if (mapping_ != Mapping::tls || !tls_kept_) return rebuild(p, cells, layout, body, false, true);
+  return rebuild_tls<TlsFields{.velocity = true, .reuse = true}>(p, cells, layout, body);
+}
+
+template <int Dim>
+template <TlsFields Fit, class Body>
+MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
+                                                  const CellBins<Dim>& layout, const Body& body) {
   switch (tls_degree_) {
-    case 0: return rebuild_tls<0, false, true>(p, cells, layout, body);
-    case 1: return rebuild_tls<1, false, true>(p, cells, layout, body);
-    default: return rebuild_tls<2, false, true>(p, cells, layout, body);
+    case 0: return rebuild_tls_of_degree<0, Fit>(p, cells, layout, body);
+    case 1: return rebuild_tls_of_degree<1, Fit>(p, cells, layout, body);
+    default: return rebuild_tls_of_degree<2, Fit>(p, cells, layout, body);
   }
 }
 
@@ -343,16 +360,17 @@ void limited_values(const TaylorFit<Dim, Degree, K>& fit, Eigen::Matrix<double, 
 }
 
 /// What a TLS rebuild sums per cell over the cell's own particles, in the cell's Taylor frame, in its first pass:
-/// the normal system of all K fields (ρ | v | σ, ρb — the fits share the samples, hence D), the fields' bounds for
-/// the limiter, and the cell's mass and momentum for the constraints.
-template <int Dim, int Degree, int K>
+/// the normal system of all K fields (ρ | v | σ | ρb, those the rebuild fits; the fits share the samples, hence D),
+/// the fields' bounds for the limiter, and the cell's mass and momentum for the constraints. The last KF fields
+/// are the unconstrained fits.
+template <int Dim, int Degree, int K, int KF>
 struct TlsCellSums {
   CellBox<Dim> box;         ///< the TLS cell (1D: clipped to the body)
   TaylorFrame<Dim> frame;   ///< its Taylor frame, in which the sums are taken
   TaylorNormalSystem<Dim, Degree, K> sys;
-  /// Fields 1.. (the unconstrained fits) of this cell and its two neighbours along axis 0, in this cell's frame:
-  /// the first half of a separable 3×3 (1D: 3) neighbourhood sum.
-  TaylorNormalSystem<Dim, Degree, K - 1> row;
+  /// The unconstrained fields of this cell and its two neighbours along axis 0, in this cell's frame: the first
+  /// half of a separable 3×3 (1D: 3) neighbourhood sum, summed only where a neighbourhood fit needs it.
+  TaylorNormalSystem<Dim, Degree, KF> row;
   Eigen::Matrix<double, K, 1> lo = Eigen::Matrix<double, K, 1>::Constant(std::numeric_limits<double>::infinity());
   Eigen::Matrix<double, K, 1> hi = -lo;
   double mass = 0.0;
@@ -370,26 +388,32 @@ struct TlsCellSums {
   }
 };
 
-/// What a TLS rebuild keeps of a cell's fits for a later momentum-only rebuild of the same particle positions
-/// (GaussPoints::rebuild_momentum): the density fit's outcome (its values stay at the Gauss points) and the normal
-/// matrix of the neighbourhood fit, whose congruence moves are the costly part of summing it.
+/// What a TLS rebuild keeps of a cell for a later momentum-only rebuild of the same particle positions
+/// (GaussPoints::rebuild_momentum): the density fit's outcome (its values stay at the Gauss points), and the
+/// normal matrices of the own and of the neighbourhood fit, which depend on the positions only.
 template <int Dim, int Degree>
 struct TlsKeptFit {
   FitStatus rho;
-  Eigen::Matrix<double, taylor_size<Dim>(Degree), taylor_size<Dim>(Degree)> neighbourhood_D;
+  Eigen::Matrix<double, taylor_size<Dim>(Degree), taylor_size<Dim>(Degree)> own_D, neighbourhood_D;
 };
 
 }  // namespace detail
 
 template <int Dim>
-template <int Degree, bool Stress, bool Reuse, class Body>
-MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
-                                                  const CellBins<Dim>& layout, const Body& body) {
-  static_assert(!(Stress && Reuse), "a momentum-only rebuild has no stress");
-  constexpr int KS = Stress ? sym_components<Dim> + Dim : 0;  // σ, ρb
-  constexpr int KF = Dim + KS;                                 // the unconstrained fits: v | σ, ρb
-  using Sums = detail::TlsCellSums<Dim, Degree, 1 + KF>;
-  using Values = Eigen::Matrix<double, 1 + KF, 1>;     // what a particle gives: ρ | v | σ, ρb
+template <int Degree, TlsFields Fit, class Body>
+MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<Dim>& p, const CellBins<Dim>& cells,
+                                                            const CellBins<Dim>& layout, const Body& body) {
+  constexpr int KR = Fit.reuse ? 0 : 1;                     // ρ, the constrained fit (a reuse keeps it)
+  constexpr int KV = Fit.velocity ? Dim : 0;                // v
+  constexpr int KS = Fit.stress ? sym_components<Dim> : 0;  // σ
+  constexpr int KB = Fit.stress && Body::active ? Dim : 0;  // ρb
+  constexpr int KF = KV + KS + KB;                          // the unconstrained fits
+  constexpr int K = KR + KF;
+  static_assert(KF > 0, "a TLS rebuild fits the velocity or the stress");
+  static_assert(!Fit.reuse || (Fit.velocity && !Fit.stress), "a reuse refits the velocity alone");
+  constexpr std::size_t enough_points = 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
+  using Sums = detail::TlsCellSums<Dim, Degree, K, KF>;
+  using Values = Eigen::Matrix<double, K, 1>;  // what a particle gives: ρ | v | σ | ρb
   using FitValues = Eigen::Matrix<double, KF, 1>;
   using FitSystem = detail::TaylorNormalSystem<Dim, Degree, KF>;
   std::size_t ncells = 1;
@@ -398,7 +422,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
   std::vector<FallbackCounts>& counts = scratch<FallbackCounts>(ncells);
   std::vector<Sums>& sums = scratch<Sums>(ncells);
   std::vector<detail::TlsKeptFit<Dim, Degree>>& kept = scratch<detail::TlsKeptFit<Dim, Degree>>(ncells);
-  if (!Reuse) tls_kept_ = false;  // until this rebuild completes
+  std::vector<std::uint8_t>& needs_neighbours = scratch<std::uint8_t>(ncells);  // the cell's own particles did not do
+  if (!Fit.reuse) tls_kept_ = false;  // until this rebuild completes
   const unsigned* order = cells.order().data();
   Extent1d extent{-1e300, 1e300};
   if constexpr (Dim == 1) extent = body_extent_1d(p, cells.order().size());
@@ -412,63 +437,6 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
       }
     return box;
   };
-
-  // Pass 1: each particle is read once, into the sums of its cell; the cells in the order of `layout`'s blocks,
-  // which the particle columns follow (a row-major sweep jumped between the colour classes of the blocks). The
-  // neighbourhood fits of pass 3 move the sums of the neighbouring cells into their own frame (TaylorChange)
-  // instead of revisiting those cells' particles, separably: pass 2 sums each cell's row of three along axis 0,
-  // pass 3 the rows of three along axis 1, four one-axis moves per cell instead of eight general ones. With 2×2
-  // particles per cell, where every velocity and stress fit needs the 3×3 neighbourhood, this and the fixed-size
-  // solve cut the two rebuilds of a MUSL step from 5570 to 2400 instructions per particle (callgrind;
-  // docs/RECONSTRUCTION.md). Neighbours weigh as much as own particles here (TlsOptions::neighbour_weight = 1, the
-  // thesis' choice): a separable sum cannot weigh them apart. The view is captured by value: through the
-  // reference GCC reloaded every column pointer after each store to the sums.
-  layout.for_each_cell_by_block([&, p = p](std::size_t c) {
-    const auto range = cells.block_range(c);  // (clang 14 cannot capture structured bindings)
-    const std::size_t begin = range.first, end = range.second;
-    Sums& cs = sums[c];
-    cs = Sums{};
-    cs.box = tls_box(c);
-    cs.frame = TaylorFrame<Dim>(cs.box);
-    totals[c] = MomentumTotals<Dim>{};
-    if (begin == end) return;
-    const TaylorFrame<Dim> frame = cs.frame;
-    Values lo = cs.lo, hi = cs.hi;  // locals while the particles stream in (see add_samples)
-    double mass = 0.0;
-    MomentumTotals<Dim> total;  // Σ m v (the momentum constraint) and Σ m |v|
-    cs.sys.add_samples([&](auto&& add_one) {
-      for (std::size_t k = begin; k < end; ++k) {
-        const std::size_t ip = order[k];
-        Values f;
-        Vec<Dim> x;
-        double v[Dim];
-        const double rho = p.m[ip] / (det(p, ip) * p.V0[ip]);  // V_p = J_p V0_p (eq. 2.42)
-        f[0] = rho;
-        for (int d = 0; d < Dim; ++d) {
-          x[d] = p.x[d][ip];
-          f[1 + d] = v[d] = p.v[d][ip];
-        }
-        if constexpr (Stress) {
-          for (int i = 0; i < sym_components<Dim>; ++i) f[1 + Dim + i] = p.s[i][ip];
-          std::array<double, Dim> b{};
-          if constexpr (Body::active) b = body.template at<Dim>(ip);
-          for (int d = 0; d < Dim; ++d) f[1 + Dim + sym_components<Dim> + d] = rho * b[d];
-        }
-        add_one(frame.xi(x), f, 1.0);
-        lo = lo.cwiseMin(f);
-        hi = hi.cwiseMax(f);
-        mass += p.m[ip];
-        total.add(p.m[ip], v);
-      }
-    });
-    cs.sys.points = end - begin;
-    cs.lo = lo;
-    cs.hi = hi;
-    cs.mass = mass;
-    for (int d = 0; d < Dim; ++d) cs.momentum[d] = total.mv[d];
-    totals[c] = total;
-  });
-
   auto frame_of = [&](std::size_t c) -> const TaylorFrame<Dim>& { return sums[c].frame; };
   // The Gauss points sit at the same place of every TLS cell (1D: of its occupied part): ξ = 2 local − 1.
   std::array<TaylorVector<Dim, Degree>, max_per_cell> psi_buffer;
@@ -478,41 +446,125 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     psi_buffer[g] = taylor_basis_ref<Dim, Degree>(xi);
   }
   const std::span<const TaylorVector<Dim, Degree>> psi(psi_buffer.data(), per_cell_);
-  // Pass 2: row sums, for every cell (a cell without particles may still join its neighbours' sums).
-  for_each_cell(ncells, [&](std::size_t c) {
-    Sums& cs = sums[c];
-    cs.row = cs.template fields<1, KF>();
-    const TaylorFrame<Dim>& frame = cs.frame;
-    for_each_neighbour_along(c, 0, [&](std::size_t n) {
-      const auto& ns = sums[n].sys;
-      cs.row.add_moved(ns.D, ns.b.template rightCols<KF>(), ns.shift.template tail<KF>(), ns.points,
-                       TaylorChange<Dim, Degree, 1u>(frame_of(n), frame), 1.0);
-    });
-  });
 
-  // Pass 3: the fits, the limiter and the Gauss-point values, per cell.
-  for_each_cell(ncells, [&](std::size_t c) {
+  // The unconstrained fits (velocity, stress) have no integral to anchor them. From its own particles alone a cell
+  // fits them only with at least two samples per Taylor function and a well-conditioned normal matrix (relative
+  // pivot ≥ 1e-3 after equilibration, not just full rank); otherwise it fits the same degree to its own and its 8
+  // neighbours' particles (thesis §5.2.3, Fig. 5.7; a `neighbour` fallback). Measured on the plate at A = 0.1
+  // (docs/RECONSTRUCTION.md): a constant stress per cell under-integrates the force (64², 2×2 particles: u error
+  // 24 % of A at A = 0.05); a linear fit through 4 particles blows up (exit 3), and so does one through 6 (3×2)
+  // whose layout compression has flattened; requiring 3 samples per function instead of the conditioning test
+  // also completes but stalls at 64² (2×2: u 2.0e-3 → 1.6e-3, against 1.7e-3 → 5.1e-4 with this rule).
+  constexpr double own_fit_pivot = 1e-3;
+  TlsOptions opt;
+  opt.rank_threshold = own_fit_pivot;
+
+  // The limiter and the Gauss-point values of a cell's unconstrained fit.
+  auto write_fit = [&](std::size_t c, const TaylorFit<Dim, Degree, KF>& fit) {
     const Sums& cs = sums[c];
     const std::size_t first = c * per_cell_;
+    const double volume = cs.box.volume();
+    std::array<FitValues, max_per_cell> values;
+    detail::limited_values(fit, cs.lo.template tail<KF>().eval(), cs.hi.template tail<KF>().eval(), psi,
+                           values.data());
+    // Momentum as ρ̂ v̂, not a fit of ρv (beyond the thesis, which fits ρv, eq. 5.9): v̂ is bounded by the cell's
+    // particle velocities, so a nodal velocity Σφρ̂v̂ω / Σφρ̂ω is a weighted mean of bounded values even where the
+    // nodal mass is tiny. Fitting ρ and ρv apart let their ratio run away at such nodes (v ≈ 2e4 m/s on the
+    // 64² plate with 2×2 particles per cell). The mean of v̂ is shifted so that Σ_g ρ̂v̂ω = Σ m_p v_p exactly.
+    if constexpr (Fit.velocity) {
+      double m_g = 0.0;
+      Eigen::Matrix<double, Dim, 1> q_g = Eigen::Matrix<double, Dim, 1>::Zero();
+      for (int g = 0; g < per_cell_; ++g) {
+        m_g += m_[first + g];
+        q_g += m_[first + g] * values[g].template head<Dim>();
+      }
+      const Eigen::Matrix<double, Dim, 1> shift = (cs.momentum - q_g) / m_g;
+      for (int g = 0; g < per_cell_; ++g)
+        for (int d = 0; d < Dim; ++d) q_[d][first + g] = m_[first + g] * (values[g][d] + shift[d]);
+    }
+    if constexpr (Fit.stress)
+      for (int g = 0; g < per_cell_; ++g) {
+        const double w = local_w_[g] * volume;
+        for (int k = 0; k < KS; ++k) s_[k][first + g] = w * values[g][KV + k];
+        for (int d = 0; d < KB; ++d) fb_[d][first + g] = w * values[g][KV + KS + d];
+      }
+  };
+
+  // Pass 1: each particle is read once, into the sums of its cell, and the cell fits what its own particles
+  // determine; the cells in the order of `layout`'s blocks, which the particle columns follow (a row-major sweep
+  // jumped between the colour classes of the blocks). The view is captured by value: through the reference GCC
+  // reloaded every column pointer after each store to the sums.
+  layout.for_each_cell_by_block([&, p = p](std::size_t c) {
+    const auto range = cells.block_range(c);  // (clang 14 cannot capture structured bindings)
+    const std::size_t begin = range.first, end = range.second;
+    Sums& cs = sums[c];
+    cs = Sums{};
+    cs.box = tls_box(c);
+    cs.frame = TaylorFrame<Dim>(cs.box);
+    totals[c] = MomentumTotals<Dim>{};
     counts[c] = FallbackCounts{};
-    if (cs.sys.points == 0) {  // an empty cell carries nothing: nothing to conserve there
+    needs_neighbours[c] = 0;
+    if constexpr (!Fit.reuse) kept[c].own_D.setZero();
+    const std::size_t first = c * per_cell_;
+    if (begin == end) {  // an empty cell carries nothing: nothing to conserve there
       for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
       return;
     }
+    const TaylorFrame<Dim> frame = cs.frame;
+    Values lo = cs.lo, hi = cs.hi;  // locals while the particles stream in (see add_samples)
+    double mass = 0.0;
+    MomentumTotals<Dim> total;  // Σ m v (the momentum constraint) and Σ m |v|
+    // a reuse sums the velocity right-hand sides only: D depends on the positions, unchanged since it was kept
+    cs.sys.template add_samples<!Fit.reuse>([&](auto&& add_one) {
+      for (std::size_t k = begin; k < end; ++k) {
+        const std::size_t ip = order[k];
+        Values f;
+        Vec<Dim> x;
+        for (int d = 0; d < Dim; ++d) x[d] = p.x[d][ip];
+        double rho = 0.0;
+        if constexpr (!Fit.reuse) {
+          rho = p.m[ip] / (det(p, ip) * p.V0[ip]);  // V_p = J_p V0_p (eq. 2.42)
+          f[0] = rho;
+          mass += p.m[ip];
+        }
+        if constexpr (Fit.velocity) {
+          double v[Dim];
+          for (int d = 0; d < Dim; ++d) f[KR + d] = v[d] = p.v[d][ip];
+          total.add(p.m[ip], v);
+        }
+        if constexpr (Fit.stress)
+          for (int i = 0; i < KS; ++i) f[KR + KV + i] = p.s[i][ip];
+        if constexpr (KB > 0) {
+          const std::array<double, Dim> b = body.template at<Dim>(ip);
+          for (int d = 0; d < Dim; ++d) f[KR + KV + KS + d] = rho * b[d];
+        }
+        add_one(frame.xi(x), f, 1.0);
+        lo = lo.cwiseMin(f);
+        hi = hi.cwiseMax(f);
+      }
+    });
+    cs.sys.points = end - begin;
+    cs.lo = lo;
+    cs.hi = hi;
+    cs.mass = mass;
+    for (int d = 0; d < Dim; ++d) cs.momentum[d] = total.mv[d];
+    totals[c] = total;
+    if constexpr (Fit.reuse) cs.sys.D = kept[c].own_D;
+    else kept[c].own_D = cs.sys.D;
     const CellBox<Dim>& box = cs.box;
-    if constexpr (Dim == 1) {  // the occupied part of the cell: its Gauss points move there
-      const CellBox<Dim> whole = cell_box(c);
-      double w[16];            // ≤ 10 points per cell (scene range of gauss_per_cell)
-      place_clipped(first, cell_rule_, whole.lo[0], whole.hi[0], extent.lo, extent.hi, w);
-    }
     const double volume = box.volume();
 
     // The density fit uses the cell's own particles only: completing it from the neighbouring cells (thesis
     // §5.2.3) was measured to bias the slopes of compressed cells (plate, A = 0.1: 64-cell error 2.4x larger);
     // a cell its own particles do not determine drops to a lower degree instead, conservative all the same.
     // The cell's mass Σ m_p fixes the first Taylor coefficient of ρ (thesis eq. 5.9).
-    // A momentum-only rebuild keeps the density at the Gauss points (m_): the particles it came from are unchanged.
-    if constexpr (!Reuse) {
+    // A reuse keeps the density at the Gauss points (m_): the particles it came from are unchanged.
+    if constexpr (!Fit.reuse) {
+      if constexpr (Dim == 1) {  // the occupied part of the cell: its Gauss points move there
+        const CellBox<Dim> whole = cell_box(c);
+        double w[16];            // ≤ 10 points per cell (scene range of gauss_per_cell)
+        place_clipped(first, cell_rule_, whole.lo[0], whole.hi[0], extent.lo, extent.hi, w);
+      }
       auto rho_sys = cs.template fields<0, 1>();
       rho_sys.reshift(Eigen::Matrix<double, 1, 1>(cs.mass / volume));
       const auto rho_fit =
@@ -525,17 +577,47 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
     }
     counts[c].add(kept[c].rho);
 
-    // The unconstrained fits (velocity, stress) have no integral to anchor them. From its own particles alone a cell
-    // fits them only with at least two samples per Taylor function and a well-conditioned normal matrix (relative
-    // pivot ≥ 1e-3 after equilibration, not just full rank); otherwise it fits the same degree to its own and its 8
-    // neighbours' particles (thesis §5.2.3, Fig. 5.7; a `neighbour` fallback). Measured on the plate at A = 0.1
-    // (docs/RECONSTRUCTION.md): a constant stress per cell under-integrates the force (64², 2×2 particles: u error
-    // 24 % of A at A = 0.05); a linear fit through 4 particles blows up (exit 3), and so does one through 6 (3×2)
-    // whose layout compression has flattened; requiring 3 samples per function instead of the conditioning test
-    // also completes but stalls at 64² (2×2: u 2.0e-3 → 1.6e-3, against 1.7e-3 → 5.1e-4 with this rule).
-    constexpr double own_fit_pivot = 1e-3;
-    TlsOptions opt;
-    opt.rank_threshold = own_fit_pivot;
+    TaylorFit<Dim, Degree, KF> fit;
+    if (cs.sys.points >= enough_points && detail::own_fit(box, cs.template fields<KR, KF>(), false, opt, fit))
+      write_fit(c, fit);
+    else
+      needs_neighbours[c] = 1;
+  });
+
+  // Pass 2: row sums, where a neighbourhood fit of pass 3 needs them (a cell without particles may still join
+  // its neighbours' sums). The neighbourhood fits move the sums of the neighbouring cells into their own frame
+  // (TaylorChange) instead of revisiting those cells' particles, separably: pass 2 sums each cell's row of three
+  // along axis 0, pass 3 the rows of three along axis 1, four one-axis moves per cell instead of eight general
+  // ones. With 2×2 particles per cell, where every velocity and stress fit needs the 3×3 neighbourhood, this and
+  // the fixed-size solve cut the two rebuilds of a MUSL step from 5570 to 2400 instructions per particle
+  // (callgrind; docs/RECONSTRUCTION.md). Neighbours weigh as much as own particles here
+  // (TlsOptions::neighbour_weight = 1, the thesis' choice): a separable sum cannot weigh them apart.
+  auto row_needed = [&](std::size_t c) {
+    bool needed = needs_neighbours[c];
+    if constexpr (Dim == 2) for_each_neighbour_along(c, 1, [&](std::size_t n) { needed |= needs_neighbours[n]; });
+    return needed;
+  };
+  for_each_cell(ncells, [&](std::size_t c) {
+    if (!row_needed(c)) return;
+    Sums& cs = sums[c];
+    cs.row = cs.template fields<KR, KF>();
+    const TaylorFrame<Dim>& frame = cs.frame;
+    for_each_neighbour_along(c, 0, [&](std::size_t n) {
+      const auto& ns = sums[n].sys;
+      const TaylorChange<Dim, Degree, 1u> change(frame_of(n), frame);
+      // a reuse moves only the right-hand sides and Σ w ψ (D's first column), which pass 3 moves on
+      if constexpr (Fit.reuse)
+        cs.row.template add_moved_rhs<true>(ns.D.col(0), ns.b.template rightCols<KF>(),
+                                            ns.shift.template tail<KF>(), ns.points, change, 1.0);
+      else
+        cs.row.add_moved(ns.D, ns.b.template rightCols<KF>(), ns.shift.template tail<KF>(), ns.points, change, 1.0);
+    });
+  });
+
+  // Pass 3: the neighbourhood fits of the cells whose own particles did not determine theirs.
+  for_each_cell(ncells, [&](std::size_t c) {
+    if (!needs_neighbours[c]) return;
+    const Sums& cs = sums[c];
     const TaylorFrame<Dim>& frame = cs.frame;
     auto add_neighbours = [&](FitSystem& sys) {  // own + neighbours: the rows above and below moved to this one
       sys = cs.row;
@@ -543,46 +625,25 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls(const ParticleView<Dim>& p, co
         for_each_neighbour_along(c, 1, [&](std::size_t n) {
           const TaylorChange<Dim, Degree, 2u> change(frame_of(n), frame);
           const auto& row = sums[n].row;
-          if constexpr (Reuse) sys.add_moved_rhs(row.D.col(0), row.b, row.shift, row.points, change, 1.0);
+          if constexpr (Fit.reuse) sys.add_moved_rhs(row.D.col(0), row.b, row.shift, row.points, change, 1.0);
           else sys.add_moved(row, change, 1.0);
         });
-      if constexpr (Reuse) sys.D = kept[c].neighbourhood_D;  // the same positions: the same matrix
+      if constexpr (Fit.reuse) sys.D = kept[c].neighbourhood_D;  // the same positions: the same matrix
       else kept[c].neighbourhood_D = sys.D;
       return sys.points > cs.sys.points;
     };
-    auto fit_sys = cs.template fields<1, KF>();
-    const bool enough = cs.sys.points >= 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
+    auto fit_sys = cs.template fields<KR, KF>();
+    const bool enough = cs.sys.points >= enough_points;
     if (!enough) add_neighbours(fit_sys);
-    auto fit = detail::complete_fit<Degree>(box, fit_sys, false,
+    auto fit = detail::complete_fit<Degree>(cs.box, fit_sys, false,
                                             [&](auto& sys) { return enough && add_neighbours(sys); }, opt);
     if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
     counts[c].add(fit.status);
-    std::array<FitValues, max_per_cell> values;
-    detail::limited_values(fit, cs.lo.template tail<KF>().eval(), cs.hi.template tail<KF>().eval(), psi,
-                           values.data());
-
-    // Momentum as ρ̂ v̂, not a fit of ρv (beyond the thesis, which fits ρv, eq. 5.9): v̂ is bounded by the cell's
-    // particle velocities, so a nodal velocity Σφρ̂v̂ω / Σφρ̂ω is a weighted mean of bounded values even where the
-    // nodal mass is tiny. Fitting ρ and ρv apart let their ratio run away at such nodes (v ≈ 2e4 m/s on the
-    // 64² plate with 2×2 particles per cell). The mean of v̂ is shifted so that Σ_g ρ̂v̂ω = Σ m_p v_p exactly.
-    double m_g = 0.0;
-    Eigen::Matrix<double, Dim, 1> q_g = Eigen::Matrix<double, Dim, 1>::Zero();
-    for (int g = 0; g < per_cell_; ++g) {
-      m_g += m_[first + g];
-      q_g += m_[first + g] * values[g].template head<Dim>();
-    }
-    const Eigen::Matrix<double, Dim, 1> shift = (cs.momentum - q_g) / m_g;
-    for (int g = 0; g < per_cell_; ++g) {
-      const double w = local_w_[g] * volume;
-      for (int d = 0; d < Dim; ++d) q_[d][first + g] = m_[first + g] * (values[g][d] + shift[d]);
-      if constexpr (Stress) {
-        for (int k = 0; k < sym_components<Dim>; ++k) s_[k][first + g] = w * values[g][Dim + k];
-        for (int d = 0; d < Dim; ++d) fb_[d][first + g] = w * values[g][Dim + sym_components<Dim> + d];
-      }
-    }
+    write_fit(c, fit);
   });
   for (const auto& c : counts) fallbacks_ += c;
   tls_kept_ = true;
+  if constexpr (!Fit.velocity) return MomentumTotals<Dim>{};
   return sum_totals(totals);
 }
 

@@ -564,7 +564,7 @@ double Simulation<Dim>::step_with(const B& basis, const M& material, const F& bo
     if (gauss_) {
       const MomentumTotals<Dim> totals = only_velocities_changed
                                              ? gauss_->rebuild_momentum(pv, *particle_cells_, bins_, body)
-                                             : gauss_->rebuild(pv, *particle_cells_, bins_, body, Fields.force);
+                                             : gauss_->rebuild(pv, *particle_cells_, bins_, body, Fields.force, Fields.momentum);
       const auto gp = gauss_->view();
       const unsigned* gorder = gauss_->bins().order().data();
       gauss_->bins().for_each_block_coloured([&](std::size_t b, std::size_t e) {

@@ -221,7 +221,9 @@ struct TaylorNormalSystem {
   /// triangle, and written back once. Summing into the members directly made every sample a round trip through
   /// memory (the caller's particle columns may alias them): a TLS rebuild's first pass was 23 % of a 2D MUSL-TLS
   /// step (perf, 3×3 particles per cell) at ≈ 160 cycles per particle.
-  template <class Visit>
+  /// Matrix = false sums the right-hand sides only, for samples whose D the caller already has (the same
+  /// positions as an earlier sum: a momentum-only TLS rebuild); D is left as it is.
+  template <bool Matrix = true, class Visit>
   void add_samples(Visit&& visit) {
     Eigen::Matrix<double, K, N> bt = b.transpose();
     Eigen::Matrix<double, N, N> lower = D;
@@ -235,12 +237,15 @@ struct TaylorNormalSystem {
       const auto psi = taylor_basis_values<Dim, Degree>(xi);
       const Eigen::Matrix<double, K, 1> g = f - s;
       for (int k = 0; k < N; ++k) bt.col(k) += (w * psi[k]) * g;
-      for (int i = 0; i < N; ++i)
-        for (int j = 0; j <= i; ++j) lower(i, j) += (w * psi[i]) * psi[j];
+      if constexpr (Matrix)
+        for (int i = 0; i < N; ++i)
+          for (int j = 0; j <= i; ++j) lower(i, j) += (w * psi[i]) * psi[j];
     });
-    for (int i = 0; i < N; ++i)
-      for (int j = 0; j < i; ++j) lower(j, i) = lower(i, j);
-    D = lower;
+    if constexpr (Matrix) {
+      for (int i = 0; i < N; ++i)
+        for (int j = 0; j < i; ++j) lower(j, i) = lower(i, j);
+      D = lower;
+    }
     b = bt.transpose();
     shift = s;
     shift_set = have_shift;
@@ -266,12 +271,15 @@ struct TaylorNormalSystem {
     D += scale * change.congruence(their_D);
   }
   /// The right-hand sides and count of add_moved, not D: for samples at the positions of an earlier add_moved
-  /// whose D (G D Gᵀ) the caller kept. `their_weights` is their Σ w ψ (the first column of their D).
-  template <unsigned Axes, class DerivedW, class DerivedB, class DerivedS>
+  /// whose D (G D Gᵀ) the caller kept. `their_weights` is their Σ w ψ (the first column of their D); with
+  /// `weights` set, D's first column is moved too (G D Gᵀ e₁ = G D e₁, since ψ_1 = 1 in every frame), for a
+  /// caller that moves these sums on once more.
+  template <bool Weights = false, unsigned Axes, class DerivedW, class DerivedB, class DerivedS>
   void add_moved_rhs(const Eigen::MatrixBase<DerivedW>& their_weights, const Eigen::MatrixBase<DerivedB>& their_b,
                      const Eigen::MatrixBase<DerivedS>& their_shift, std::size_t their_points,
                      const TaylorChange<Dim, Degree, Axes>& change, double scale) {
     if (their_points == 0) return;
+    if constexpr (Weights) D.col(0) += scale * change.apply(their_weights);
     if (!shift_set) {
       shift = their_shift;
       shift_set = true;
@@ -307,6 +315,20 @@ struct TaylorNormalSystem {
   }
 };
 
+/// Stage 1 of the completion order alone: the fit to the cell's own samples (`sys`) at the requested degree
+/// (constrained: c_0 is the shift). False, `fit` undefined, when they do not determine it: the caller completes
+/// with complete_fit.
+template <int Degree, int Dim, int K>
+inline bool own_fit(const CellBox<Dim>& cell, const TaylorNormalSystem<Dim, Degree, K>& sys, bool constrained,
+                    const TlsOptions& opt, TaylorFit<Dim, Degree, K>& fit) {
+  fit.cell = cell;
+  if (!(constrained ? sys.template solve<Degree, true>(opt, fit.c) : sys.template solve<Degree, false>(opt, fit.c)))
+    return false;
+  fit.c.row(0) += sys.shift.transpose();
+  fit.status = {FitStage::full, Degree, sys.points};
+  return true;
+}
+
 /// The completion order shared by the constrained and the unconstrained fit, on a normal system that holds the
 /// cell's own samples (constrained: shifted by c_0, which the fit keeps). add_neighbours(sys) adds the neighbour
 /// samples to it and returns false if there are none.
@@ -315,7 +337,8 @@ inline TaylorFit<Dim, Degree, K> complete_fit(const CellBox<Dim>& cell, TaylorNo
                                               bool constrained, AddNeighbours&& add_neighbours,
                                               const TlsOptions& opt) {
   TaylorFit<Dim, Degree, K> fit;
-  fit.cell = cell;
+  // 1. The cell's own samples at the requested degree.
+  if (own_fit(cell, sys, constrained, opt, fit)) return fit;
   // Own-sample constant for the unconstrained constant stage: Σ w (f − shift) / Σ w over the cell's samples.
   const double own_w = sys.D(0, 0);
   const Eigen::Matrix<double, K, 1> own_b = sys.b.row(0).transpose();
@@ -329,8 +352,6 @@ inline TaylorFit<Dim, Degree, K> complete_fit(const CellBox<Dim>& cell, TaylorNo
     return constrained ? sys.template solve<Deg, true>(opt, fit.c) : sys.template solve<Deg, false>(opt, fit.c);
   };
 
-  // 1. The cell's own samples at the requested degree.
-  if (solve.template operator()<Degree>()) return done(FitStage::full, Degree);
   // 2. (a) add the neighbour samples (thesis §5.2.3, Fig. 5.7), same degree.
   if (add_neighbours(sys) && solve.template operator()<Degree>()) return done(FitStage::neighbour, Degree);
   // 3. (b) lower the degree (thesis §5.2.3: "reducing the number of basis functions"), neighbours kept.
