@@ -50,13 +50,18 @@ CellBins<Dim> CellBins<Dim>::single_cells_in_order_of(const CellBins& layout) {
   for (int d = 0; d < Dim; ++d) length[d] = layout.cells_[d] / layout.inv_h_[d];
   CellBins cells(layout.cells_, length, 1);
   cells.inv_h_ = layout.inv_h_;  // the same cell of every position as the layout
-  std::size_t next = 0;
-  for (const unsigned block : layout.block_of_rank_)  // serially, in the order of for_each_cell_by_block
-    layout.for_each_cell_of_block(block, [&](std::size_t cell) {
-      cells.rank_[cell] = static_cast<unsigned>(next);
-      cells.block_of_rank_[next++] = static_cast<unsigned>(cell);
-    });
+  cells.block_of_rank_ = layout.cells_by_block();
+  for (std::size_t k = 0; k < cells.block_of_rank_.size(); ++k) cells.rank_[cells.block_of_rank_[k]] = static_cast<unsigned>(k);
   cells.coloured_ = false;
+  return cells;
+}
+
+template <int Dim>
+std::vector<unsigned> CellBins<Dim>::cells_by_block() const {
+  std::vector<unsigned> cells;
+  cells.reserve(rank_.size() * (Dim == 1 ? block_width_ : block_width_ * block_width_));
+  for (const unsigned block : block_of_rank_)
+    for_each_cell_of_block(block, [&](std::size_t cell) { cells.push_back(static_cast<unsigned>(cell)); });
   return cells;
 }
 

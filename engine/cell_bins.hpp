@@ -89,6 +89,9 @@ class CellBins {
                       });
   }
 
+  /// The cells (row-major indices) in the order for_each_cell_by_block visits them, blocks by rank.
+  std::vector<unsigned> cells_by_block() const;
+
   /// Calls f(begin, end) for every block's range in a fixed serial order (the reference for the scatter).
   template <class F>
   void for_each_block_serial(F&& f) const {

@@ -24,12 +24,19 @@ std::array<double, Dim> first_n(const std::array<double, 3>& a) {
 
 template <int Dim>
 GaussPoints<Dim>::GaussPoints(const Scene& scene)
+    : GaussPoints(scene, CellBins<Dim>::block_width_for(stencil_reach(degree_of(scene.grid.basis) + 1), 0)) {}
+
+template <int Dim>
+GaussPoints<Dim>::GaussPoints(const Scene& scene, int block_width)
     : mapping_(scene.algorithm.mapping),
       tls_degree_(scene.algorithm.tls_degree),
       mls_support_(scene.algorithm.mls_support),
       cells_(first_n<Dim>(scene.grid.cells)),
-      bins_(cells_, first_n<Dim>(scene.grid.length),  // Gauss points do not move: no slack
-            CellBins<Dim>::block_width_for(stencil_reach(degree_of(scene.grid.basis) + 1), 0)) {
+      bins_(cells_, first_n<Dim>(scene.grid.length), block_width) {
+  const int narrowest = CellBins<Dim>::block_width_for(stencil_reach(degree_of(scene.grid.basis) + 1), 0);
+  if (block_width < narrowest)
+    throw std::logic_error("GaussPoints: blocks of " + std::to_string(block_width) + " cells, at least " +
+                           std::to_string(narrowest) + " needed for the scene's basis");
   std::size_t ncells = 1;
   for (int d = 0; d < Dim; ++d) {
     h_[d] = scene.grid.length[d] / cells_[d];
@@ -77,14 +84,17 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene)
     fb_[d].assign(n, 0.0);
   }
   for (auto& col : s_) col.assign(n, 0.0);
+  slot_.assign(ncells, 0);
+  const std::vector<unsigned> by_block = bins_.cells_by_block();
+  for (std::size_t k = 0; k < ncells; ++k) slot_[by_block[k]] = static_cast<unsigned>(k);
   for (std::size_t c = 0; c < ncells; ++c) {
     const CellBox<Dim> box = cell_box(c);
     for (int g = 0; g < per_cell_; ++g)
-      for (int d = 0; d < Dim; ++d) x_[d][c * per_cell_ + g] = box.lo[d] + local_[g][d] * h_[d];
+      for (int d = 0; d < Dim; ++d) x_[d][first_point(c) + g] = box.lo[d] + local_[g][d] * h_[d];
   }
   std::array<const double*, Dim> x;
   for (int d = 0; d < Dim; ++d) x[d] = x_[d].data();
-  bins_.bin(x, n);  // Gauss points never move: binned once
+  bins_.bin(x, n);  // Gauss points never move: binned once (in storage order, as they are placed)
 }
 
 template <int Dim>
@@ -114,7 +124,7 @@ template <int Dim>
 void GaussPoints<Dim>::place_half_span(std::size_t c, int half, double lo, double hi, double* w) {
   const double a = cell_box(c).lo[0] + 0.5 * half * h_[0];
   const std::size_t n = half_rule_.x.size();
-  place_clipped(c * per_cell_ + half * n, half_rule_, a, a + 0.5 * h_[0], lo, hi, w);
+  place_clipped(first_point(c) + half * n, half_rule_, a, a + 0.5 * h_[0], lo, hi, w);
 }
 
 template <int Dim>

@@ -80,6 +80,12 @@ struct TlsFields {
 template <int Dim>
 class GaussPoints {
  public:
+  /// The Gauss points are stored cell by cell in the order of coloured blocks `block_width` cells wide, at
+  /// least the narrowest width for the scene's stencil (CellBins::block_width_for, no slack: they never move).
+  /// Given the width of the particles' bins, the TLS rebuild (which visits the cells in their block order) and
+  /// the coloured scatter both run through the Gauss points front to back.
+  GaussPoints(const Scene& scene, int block_width);
+  /// The narrowest block width.
   explicit GaussPoints(const Scene& scene);
 
   /// Reconstructs at the Gauss points of every cell that holds particles: ρ always (TLS: conservative), ρv when
@@ -136,6 +142,8 @@ class GaussPoints {
   /// Places `rule` (on [0, 1]) on the part of [a, b] inside [lo, hi], as points first, first + 1, ... (1D); their
   /// weights into `w` (all zero, points spread over [a, b], when nothing is inside). Returns the part's length.
   double place_clipped(std::size_t first, const GaussRule& rule, double a, double b, double lo, double hi, double* w);
+  /// The index of the first Gauss point of cell c (row-major): cells in the block order of bins_.
+  std::size_t first_point(std::size_t c) const { return static_cast<std::size_t>(slot_[c]) * per_cell_; }
   /// Zeroes what Gauss point g carries.
   void clear_point(std::size_t g) {
     m_[g] = 0.0;
@@ -216,6 +224,7 @@ class GaussPoints {
   std::vector<double> m_;
   std::array<std::vector<double>, sym_components<Dim>> s_;
   CellBins<Dim> bins_;
+  std::vector<unsigned> slot_;  ///< per cell (row-major): its rank in bins_' block order
   FallbackCounts fallbacks_;
   struct ScratchBase {
     virtual ~ScratchBase() = default;
@@ -462,7 +471,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   // The limiter and the Gauss-point values of a cell's unconstrained fit.
   auto write_fit = [&](std::size_t c, const TaylorFit<Dim, Degree, KF>& fit) {
     const Sums& cs = sums[c];
-    const std::size_t first = c * per_cell_;
+    const std::size_t first = first_point(c);
     const double volume = cs.box.volume();
     std::array<FitValues, max_per_cell> values;
     detail::limited_values(fit, cs.lo.template tail<KF>().eval(), cs.hi.template tail<KF>().eval(), psi,
@@ -505,7 +514,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     counts[c] = FallbackCounts{};
     needs_neighbours[c] = 0;
     if constexpr (!Fit.reuse) kept[c].own_D.setZero();
-    const std::size_t first = c * per_cell_;
+    const std::size_t first = first_point(c);
     if (begin == end) {  // an empty cell carries nothing: nothing to conserve there
       for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
       return;
@@ -667,7 +676,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_mls(const ParticleView<Dim>& p, co
 
   for_each_cell(ncells, [&](std::size_t c) {
     const auto own_range = cells.block_range(c);
-    const std::size_t first = c * per_cell_;
+    const std::size_t first = first_point(c);
     for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
     if (own_range.first == own_range.second) return;
     for (std::size_t k = own_range.first; k < own_range.second; ++k) {
@@ -736,7 +745,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_cubic_spline(const ParticleView<Di
         double w[16];  // ≤ 10 points per half (scene range of gauss_per_cell)
         place_half_span(c, half, lo, hi, w);
         for (int j = 0; j < n; ++j) {
-          const std::size_t g = c * per_cell_ + half * n + j;
+          const std::size_t g = first_point(c) + half * n + j;
           clear_point(g);
           if (w[j] == 0.0) continue;
           // ρ̂ω and ρv̂ω (thesis eqs 3.8–3.9), σ̂ω and ρb̂ω (eq. 3.7)

@@ -317,7 +317,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
       for (auto* a : {&cg_r_[d], &cg_z_[d], &cg_p_[d], &cg_Ap_[d], &cg_x_[d]}) a->assign(grid_.dofs, 0.0);
 
   if (scene.algorithm.mapping != Mapping::direct) {
-    gauss_.emplace(scene);
+    gauss_.emplace(scene, bins_.block_width());
     particle_cells_.emplace(CellBins<Dim>::single_cells_in_order_of(bins_));
   }
   pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force());
