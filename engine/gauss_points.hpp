@@ -22,11 +22,9 @@
 #include <stdexcept>
 #include <vector>
 
-#include <tbb/blocked_range.h>
-#include <tbb/parallel_for.h>
-
 #include "engine/body_extent.hpp"
 #include "engine/cell_bins.hpp"
+#include "engine/parallel_over.hpp"
 #include "engine/scene.hpp"
 #include "kernels/cubic_spline.hpp"
 #include "kernels/mls.hpp"
@@ -176,13 +174,11 @@ class GaussPoints {
     s->items.resize(n);
     return s->items;
   }
-  /// Calls f(c) for every cell c < ncells, in parallel. Chunks of cells, not one task per cell: with
-  /// tbb::parallel_for's index form (grain 1) the partitioner's splitting was 5 % of a TLS step.
+  /// Calls f(c) for every cell c < ncells, in parallel, in chunks of 64 cells.
   template <class F>
   static void for_each_cell(std::size_t ncells, F&& f) {
-    constexpr std::size_t grain = 64;
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ncells, grain), [&](const tbb::blocked_range<std::size_t>& r) {
-      for (std::size_t c = r.begin(); c < r.end(); ++c) f(c);
+    parallel_over(ncells, 64, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t c = begin; c < end; ++c) f(c);
     });
   }
   /// Calls f(n) for the cells n next to cell c along `axis` (one or two).
@@ -740,7 +736,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_cubic_spline(const ParticleView<Di
     const Extent1d extent = body_extent_1d(p, sorted_.size());
     const double lo = extent.lo, hi = extent.hi;  // (clang 14 cannot capture structured bindings)
     const int n = static_cast<int>(half_rule_.x.size());
-    tbb::parallel_for(std::size_t(0), static_cast<std::size_t>(cells_[0]), [&](std::size_t c) {
+    for_each_cell(static_cast<std::size_t>(cells_[0]), [&](std::size_t c) {
       for (int half = 0; half < 2; ++half) {
         double w[16];  // ≤ 10 points per half (scene range of gauss_per_cell)
         place_half_span(c, half, lo, hi, w);

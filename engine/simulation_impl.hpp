@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include "engine/parallel_over.hpp"
 #include "engine/point_load.hpp"
 #include "kernels/quadrature.hpp"
 #include "kernels/transfer.hpp"
@@ -50,12 +51,6 @@ double deterministic_sum(std::size_t n, F&& f) {
              },
              std::plus<>())
       .value();
-}
-
-template <class F>
-void parallel_over(std::size_t n, std::size_t grain, F&& f) {
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, n, grain),
-                    [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); });
 }
 
 /// Local coordinates in [0, 1) of the particles of one cell, per axis, and their volume fractions.
