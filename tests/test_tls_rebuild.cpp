@@ -64,6 +64,20 @@ struct RandomParticles {
   std::array<const double*, 2> positions() const { return {x[0].data(), x[1].data()}; }
 };
 
+/// RandomParticles binned as a simulation bins them: blocks of 5 cells (the layout of the particle columns) and
+/// single cells ranked in the layout's block order.
+struct BinnedParticles {
+  RandomParticles particles;
+  CellBins<2> layout, by_cell;
+  BinnedParticles(std::array<int, 2> cells, unsigned seed)
+      : particles(cells, seed),
+        layout(cells, {1.0, 1.0}, 5),
+        by_cell(CellBins<2>::single_cells_in_order_of(layout)) {
+    layout.bin(particles.positions(), particles.size());
+    by_cell.bin(particles.positions(), particles.size());
+  }
+};
+
 /// Cells visited by CellBins::for_each_cell_by_block, with how often each was visited.
 template <int Dim>
 std::vector<int> visits(const CellBins<Dim>& bins, std::size_t ncells) {
@@ -159,12 +173,10 @@ TEST_CASE("TLS rebuild of the stress alone, or of the velocity alone, equals a r
   for (int degree : {1, 2}) {
     const std::array<int, 2> cells{9, 8};
     const Scene scene = tls_scene(cells, degree);
-    RandomParticles particles(cells, 3 + degree);
-    const std::array<double, 2> length{1.0, 1.0};
-    CellBins<2> layout(cells, length, 5);
-    layout.bin(particles.positions(), particles.size());
-    CellBins<2> by_cell = CellBins<2>::single_cells_in_order_of(layout);
-    by_cell.bin(particles.positions(), particles.size());
+    BinnedParticles binned(cells, 3 + degree);
+    RandomParticles& particles = binned.particles;
+    const CellBins<2>& layout = binned.layout;
+    const CellBins<2>& by_cell = binned.by_cell;
     const ParticleView<2> p = particles.view();
     const NoBodyForce body;
 
@@ -202,12 +214,10 @@ TEST_CASE("TLS momentum-only rebuild after a velocity change equals a full rebui
   for (int degree : {1, 2}) {
     const std::array<int, 2> cells{9, 8};
     const Scene scene = tls_scene(cells, degree);
-    RandomParticles particles(cells, 11 + degree);
-    const std::array<double, 2> length{1.0, 1.0};
-    CellBins<2> layout(cells, length, 5);
-    layout.bin(particles.positions(), particles.size());
-    CellBins<2> by_cell = CellBins<2>::single_cells_in_order_of(layout);
-    by_cell.bin(particles.positions(), particles.size());
+    BinnedParticles binned(cells, 11 + degree);
+    RandomParticles& particles = binned.particles;
+    const CellBins<2>& layout = binned.layout;
+    const CellBins<2>& by_cell = binned.by_cell;
     const ParticleView<2> p = particles.view();
     const NoBodyForce body;
 
