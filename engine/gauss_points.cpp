@@ -84,9 +84,9 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene, int block_width)
     fb_[d].assign(n, 0.0);
   }
   for (auto& col : s_) col.assign(n, 0.0);
+  cell_of_slot_ = bins_.cells_by_block();
   slot_.assign(ncells, 0);
-  const std::vector<unsigned> by_block = bins_.cells_by_block();
-  for (std::size_t k = 0; k < ncells; ++k) slot_[by_block[k]] = static_cast<unsigned>(k);
+  for (std::size_t k = 0; k < ncells; ++k) slot_[cell_of_slot_[k]] = static_cast<unsigned>(k);
   for (std::size_t c = 0; c < ncells; ++c) {
     const CellBox<Dim> box = cell_box(c);
     for (int g = 0; g < per_cell_; ++g)

@@ -179,7 +179,11 @@ class GaussPoints {
   /// weights into `w` (all zero, points spread over [a, b], when nothing is inside). Returns the part's length.
   double place_clipped(std::size_t first, const GaussRule& rule, double a, double b, double lo, double hi, double* w);
   /// The index of the first Gauss point of cell c (row-major): cells in the block order of bins_.
-  std::size_t first_point(std::size_t c) const { return static_cast<std::size_t>(slot_[c]) * per_cell_; }
+  std::size_t first_point(std::size_t c) const { return slot(c) * per_cell_; }
+  /// Cell c's rank in bins_' block order: the index of its TLS scratch. Pass 1 of a rebuild visits the cells in
+  /// that order and so writes the scratch front to back; indexed row-major, every block row of a block jumped a
+  /// whole grid row ahead, to a page the prefetcher had not seen.
+  std::size_t slot(std::size_t c) const { return slot_[c]; }
   /// Zeroes what Gauss point g carries.
   void clear_point(std::size_t g) {
     m_[g] = 0.0;
@@ -258,7 +262,8 @@ class GaussPoints {
   std::vector<double> m_;
   std::array<std::vector<double>, sym_components<Dim>> s_;
   CellBins<Dim> bins_;
-  std::vector<unsigned> slot_;  ///< per cell (row-major): its rank in bins_' block order
+  std::vector<unsigned> slot_;          ///< per cell (row-major): its rank in bins_' block order
+  std::vector<unsigned> cell_of_slot_;  ///< the inverse: the cells (row-major) in bins_' block order
   FallbackCounts fallbacks_;
   struct ScratchBase {
     virtual ~ScratchBase() = default;
@@ -479,7 +484,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
       }
     return box;
   };
-  auto frame_of = [&](std::size_t c) -> const TaylorFrame<Dim>& { return sums[c].frame; };
+  // the per-cell scratch is indexed by slot (see slot())
+  auto frame_of = [&](std::size_t c) -> const TaylorFrame<Dim>& { return sums[slot(c)].frame; };
   // The Gauss points sit at the same place of every TLS cell (1D: of its occupied part): ξ = 2 local − 1.
   std::array<TaylorVector<Dim, Degree>, max_per_cell> psi_buffer;
   for (int g = 0; g < per_cell_; ++g) {
@@ -503,7 +509,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
 
   // The limiter and the Gauss-point values of a cell's unconstrained fit.
   auto write_fit = [&](std::size_t c, const TaylorFit<Dim, Degree, KF>& fit) {
-    const Sums& cs = sums[c];
+    const Sums& cs = sums[slot(c)];
     const std::size_t first = first_point(c);
     const double volume = cs.box.volume();
     std::array<FitValues, max_per_cell> values;
@@ -541,14 +547,15 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     const std::size_t begin = range.first, end = range.second;
     // Only what later passes read is written: resetting the whole of a cell's sums (row sums included, ≈ 70
     // doubles) made this pass store-bound, 12 % of a MUSL-TLS step (perf, 3×3 particles per cell).
-    Sums& cs = sums[c];
+    const std::size_t s = slot(c);
+    Sums& cs = sums[s];
     cs.box = tls_box(c);
     cs.frame = TaylorFrame<Dim>(cs.box);
     cs.sys = {};
-    totals[c] = MomentumTotals<Dim>{};
-    counts[c] = FallbackCounts{};
-    needs_neighbours[c] = 0;
-    if constexpr (!Fit.reuse) kept[c].own_D.setZero();
+    totals[s] = MomentumTotals<Dim>{};
+    counts[s] = FallbackCounts{};
+    needs_neighbours[s] = 0;
+    if constexpr (!Fit.reuse) kept[s].own_D.setZero();
     const std::size_t first = first_point(c);
     if (begin == end) {  // an empty cell carries nothing: nothing to conserve there
       for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
@@ -593,9 +600,9 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     cs.hi = hi;
     cs.mass = mass;
     for (int d = 0; d < Dim; ++d) cs.momentum[d] = total.mv[d];
-    totals[c] = total;
-    if constexpr (Fit.reuse) cs.sys.D = kept[c].own_D;
-    else kept[c].own_D = cs.sys.D;
+    totals[s] = total;
+    if constexpr (Fit.reuse) cs.sys.D = kept[s].own_D;
+    else kept[s].own_D = cs.sys.D;
     const CellBox<Dim>& box = cs.box;
     const double volume = box.volume();
 
@@ -614,19 +621,19 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
       rho_sys.reshift(Eigen::Matrix<double, 1, 1>(cs.mass / volume));
       const auto rho_fit =
           detail::complete_fit<Degree>(box, rho_sys, true, [](auto&) { return false; }, TlsOptions{});
-      kept[c].rho = rho_fit.status;
+      kept[s].rho = rho_fit.status;
       std::array<Eigen::Matrix<double, 1, 1>, max_per_cell> rho;
       detail::limited_values(rho_fit, cs.lo.template head<1>().eval(), cs.hi.template head<1>().eval(), psi,
                              rho.data());
       for (int g = 0; g < per_cell_; ++g) m_[first + g] = local_w_[g] * volume * rho[g][0];
     }
-    counts[c].add(kept[c].rho);
+    counts[s].add(kept[s].rho);
 
     TaylorFit<Dim, Degree, KF> fit;
     if (cs.sys.points >= enough_points && detail::own_fit(box, cs.template fields<KR, KF>(), false, opt, fit))
       write_fit(c, fit);
     else
-      needs_neighbours[c] = 1;
+      needs_neighbours[s] = 1;
   });
 
   // Pass 2: row sums, where a neighbourhood fit of pass 3 needs them (a cell without particles may still join
@@ -638,17 +645,19 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   // (callgrind; docs/RECONSTRUCTION.md). Neighbours weigh as much as own particles here
   // (TlsOptions::neighbour_weight = 1, the thesis' choice): a separable sum cannot weigh them apart.
   auto row_needed = [&](std::size_t c) {
-    bool needed = needs_neighbours[c];
-    if constexpr (Dim == 2) for_each_neighbour_along(c, 1, [&](std::size_t n) { needed |= needs_neighbours[n]; });
+    bool needed = needs_neighbours[slot(c)];
+    if constexpr (Dim == 2)
+      for_each_neighbour_along(c, 1, [&](std::size_t n) { needed |= needs_neighbours[slot(n)]; });
     return needed;
   };
-  for_each_cell(ncells, [&](std::size_t c) {
+  for_each_cell(ncells, [&](std::size_t s) {
+    const std::size_t c = cell_of_slot_[s];
     if (!row_needed(c)) return;
-    Sums& cs = sums[c];
+    Sums& cs = sums[s];
     cs.row = cs.template fields<KR, KF>();
     const TaylorFrame<Dim>& frame = cs.frame;
     for_each_neighbour_along(c, 0, [&](std::size_t n) {
-      const auto& ns = sums[n].sys;
+      const auto& ns = sums[slot(n)].sys;
       const TaylorChange<Dim, Degree, 1u> change(frame_of(n), frame);
       // a reuse moves only the right-hand sides and Σ w ψ (D's first column), which pass 3 moves on
       if constexpr (Fit.reuse)
@@ -660,21 +669,22 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   });
 
   // Pass 3: the neighbourhood fits of the cells whose own particles did not determine theirs.
-  for_each_cell(ncells, [&](std::size_t c) {
-    if (!needs_neighbours[c]) return;
-    const Sums& cs = sums[c];
+  for_each_cell(ncells, [&](std::size_t s) {
+    if (!needs_neighbours[s]) return;
+    const std::size_t c = cell_of_slot_[s];
+    const Sums& cs = sums[s];
     const TaylorFrame<Dim>& frame = cs.frame;
     auto add_neighbours = [&](FitSystem& sys) {  // own + neighbours: the rows above and below moved to this one
       sys = cs.row;
       if constexpr (Dim == 2)
         for_each_neighbour_along(c, 1, [&](std::size_t n) {
           const TaylorChange<Dim, Degree, 2u> change(frame_of(n), frame);
-          const auto& row = sums[n].row;
+          const auto& row = sums[slot(n)].row;
           if constexpr (Fit.reuse) sys.add_moved_rhs(row.D.col(0), row.b, row.shift, row.points, change, 1.0);
           else sys.add_moved(row, change, 1.0);
         });
-      if constexpr (Fit.reuse) sys.D = kept[c].neighbourhood_D;  // the same positions: the same matrix
-      else kept[c].neighbourhood_D = sys.D;
+      if constexpr (Fit.reuse) sys.D = kept[s].neighbourhood_D;  // the same positions: the same matrix
+      else kept[s].neighbourhood_D = sys.D;
       return sys.points > cs.sys.points;
     };
     auto fit_sys = cs.template fields<KR, KF>();
@@ -683,7 +693,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     auto fit = detail::complete_fit<Degree>(cs.box, fit_sys, false,
                                             [&](auto& sys) { return enough && add_neighbours(sys); }, opt);
     if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
-    counts[c].add(fit.status);
+    counts[s].add(fit.status);
     write_fit(c, fit);
   });
   for (const auto& c : counts) fallbacks_ += c;
