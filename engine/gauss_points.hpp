@@ -16,6 +16,7 @@
 // non-conservative comparison method: ∫ρ̂ and ∫ρv̂ differ from Σ m_p and Σ m_p v_p by the interpolation error.
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <limits>
 #include <memory>
@@ -419,9 +420,10 @@ struct TlsCellSums {
   /// The unconstrained fields of this cell and its two neighbours along axis 0, in this cell's frame: the first
   /// half of a separable 3×3 (1D: 3) neighbourhood sum, summed only where a neighbourhood fit needs it.
   TaylorNormalSystem<Dim, Degree, KF> row;
-  Eigen::Matrix<double, K, 1> lo, hi;  ///< the fields' bounds over the cell's particles
+  Eigen::Matrix<double, K, 1> lo = Eigen::Matrix<double, K, 1>::Zero();  ///< the fields' bounds over the cell's
+  Eigen::Matrix<double, K, 1> hi = Eigen::Matrix<double, K, 1>::Zero();  ///< particles
   double mass = 0.0;
-  Eigen::Matrix<double, Dim, 1> momentum;
+  Eigen::Matrix<double, Dim, 1> momentum = Eigen::Matrix<double, Dim, 1>::Zero();
   /// Fields [first, first + count) of the system, as a system of their own.
   template <int First, int Count>
   TaylorNormalSystem<Dim, Degree, Count> fields() const {
@@ -508,8 +510,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   opt.rank_threshold = own_fit_pivot;
 
   // The limiter and the Gauss-point values of a cell's unconstrained fit.
-  auto write_fit = [&](std::size_t c, const TaylorFit<Dim, Degree, KF>& fit) {
-    const Sums& cs = sums[slot(c)];
+  auto write_fit = [&](std::size_t c, const Sums& cs, const TaylorFit<Dim, Degree, KF>& fit) {
     const std::size_t first = first_point(c);
     const double volume = cs.box.volume();
     std::array<FitValues, max_per_cell> values;
@@ -538,34 +539,21 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
       }
   };
 
-  // Pass 1: each particle is read once, into the sums of its cell, and the cell fits what its own particles
-  // determine; the cells in the order of `layout`'s blocks, which the particle columns follow (a row-major sweep
-  // jumped between the colour classes of the blocks). The view is captured by value: through the reference GCC
+  // The sums of a cell's own particles (positions, ρ, v, σ, ρb as `Fit` names them) and its bounds, mass and
+  // momentum, in its Taylor frame; returns Σ m v, Σ m |v|. The view is captured by value: through the reference GCC
   // reloaded every column pointer after each store to the sums.
-  layout.for_each_cell_by_block([&, p = p](std::size_t c) {
+  auto sum_cell = [&, p = p](std::size_t c, Sums& cs) {
     const auto range = cells.block_range(c);  // (clang 14 cannot capture structured bindings)
     const std::size_t begin = range.first, end = range.second;
-    // Only what later passes read is written: resetting the whole of a cell's sums (row sums included, ≈ 70
-    // doubles) made this pass store-bound, 12 % of a MUSL-TLS step (perf, 3×3 particles per cell).
-    const std::size_t s = slot(c);
-    Sums& cs = sums[s];
     cs.box = tls_box(c);
     cs.frame = TaylorFrame<Dim>(cs.box);
     cs.sys = {};
-    totals[s] = MomentumTotals<Dim>{};
-    counts[s] = FallbackCounts{};
-    needs_neighbours[s] = 0;
-    if constexpr (!Fit.reuse) kept[s].own_D.setZero();
-    const std::size_t first = first_point(c);
-    if (begin == end) {  // an empty cell carries nothing: nothing to conserve there
-      for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
-      return;
-    }
+    MomentumTotals<Dim> total;  // Σ m v (the momentum constraint) and Σ m |v|
+    if (begin == end) return total;
     const TaylorFrame<Dim> frame = cs.frame;
     // locals while the particles stream in (see add_samples)
     Values lo = Values::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
     double mass = 0.0;
-    MomentumTotals<Dim> total;  // Σ m v (the momentum constraint) and Σ m |v|
     // a reuse sums the velocity right-hand sides only: D depends on the positions, unchanged since it was kept
     cs.sys.template add_samples<!Fit.reuse>([&](auto&& add_one) {
       for (std::size_t k = begin; k < end; ++k) {
@@ -595,14 +583,48 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
         hi = hi.cwiseMax(f);
       }
     });
+    if constexpr (Fit.reuse) cs.sys.D = kept[slot(c)].own_D;  // add_samples<false> leaves it as it was
     cs.sys.points = end - begin;
     cs.lo = lo;
     cs.hi = hi;
     cs.mass = mass;
     for (int d = 0; d < Dim; ++d) cs.momentum[d] = total.mv[d];
-    totals[s] = total;
-    if constexpr (Fit.reuse) cs.sys.D = kept[s].own_D;
-    else kept[s].own_D = cs.sys.D;
+    return total;
+  };
+  // Whose sums passes 2 and 3 read: the cells within one cell of a cell with particles too few for its own fit,
+  // which the bins' counts tell before any particle is read. Every other cell keeps its sums in pass 1's locals:
+  // written to the scratch and read back, that record of ≈ 70 doubles was the pass's largest memory traffic. A
+  // cell with enough particles whose own fit fails on its conditioning alone (rare) has its neighbours' sums
+  // taken in pass 1b.
+  auto sparse = [&](std::size_t c) {
+    const auto range = cells.block_range(c);
+    const std::size_t n = range.second - range.first;
+    return n > 0 && n < enough_points;
+  };
+  auto near_sparse = [&](std::size_t c) {
+    bool any = false;
+    for_each_cell_near(c, 1, [&](std::size_t n) { any = any || sparse(n); });
+    return any;
+  };
+  std::atomic<bool> conditioning_failed{false};  // pass 1b is needed
+
+  // Pass 1: each particle is read once, into the sums of its cell, and the cell fits what its own particles
+  // determine; the cells in the order of `layout`'s blocks, which the particle columns follow (a row-major sweep
+  // jumped between the colour classes of the blocks).
+  layout.for_each_cell_by_block([&](std::size_t c) {
+    const std::size_t s = slot(c);
+    Sums cs;
+    totals[s] = sum_cell(c, cs);
+    counts[s] = FallbackCounts{};
+    needs_neighbours[s] = 0;
+    const bool keep = near_sparse(c);
+    if (keep) sums[s] = cs;
+    if constexpr (!Fit.reuse) kept[s].own_D = cs.sys.D;
+    const std::size_t first = first_point(c);
+    if (cs.sys.points == 0) {  // an empty cell carries nothing: nothing to conserve there
+      for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
+      return;
+    }
     const CellBox<Dim>& box = cs.box;
     const double volume = box.volume();
 
@@ -630,11 +652,26 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     counts[s].add(kept[s].rho);
 
     TaylorFit<Dim, Degree, KF> fit;
-    if (cs.sys.points >= enough_points && detail::own_fit(box, cs.template fields<KR, KF>(), false, opt, fit))
-      write_fit(c, fit);
-    else
-      needs_neighbours[s] = 1;
+    if (cs.sys.points >= enough_points && detail::own_fit(box, cs.template fields<KR, KF>(), false, opt, fit)) {
+      write_fit(c, cs, fit);
+      return;
+    }
+    needs_neighbours[s] = 1;
+    if (keep) return;
+    sums[s] = cs;
+    conditioning_failed.store(true, std::memory_order_relaxed);
   });
+
+  // Pass 1b: the sums of the neighbours of cells whose own fit failed on its conditioning, where pass 1 did not
+  // keep them.
+  if (conditioning_failed.load())
+    for_each_cell(ncells, [&](std::size_t s) {
+      const std::size_t c = cell_of_slot_[s];
+      if (needs_neighbours[s] || near_sparse(c)) return;  // kept in pass 1
+      bool needed = false;
+      for_each_cell_near(c, 1, [&](std::size_t n) { needed = needed || needs_neighbours[slot(n)]; });
+      if (needed) sum_cell(c, sums[s]);
+    });
 
   // Pass 2: row sums, where a neighbourhood fit of pass 3 needs them (a cell without particles may still join
   // its neighbours' sums). The neighbourhood fits move the sums of the neighbouring cells into their own frame
@@ -694,7 +731,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
                                             [&](auto& sys) { return enough && add_neighbours(sys); }, opt);
     if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
     counts[s].add(fit.status);
-    write_fit(c, fit);
+    write_fit(c, cs, fit);
   });
   for (const auto& c : counts) fallbacks_ += c;
   tls_kept_ = true;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <random>
 #include <stdexcept>
+#include <utility>
 #include <vector>
 
 #include <catch2/catch.hpp>
@@ -20,33 +21,24 @@ using namespace mpm;
 
 namespace {
 
-/// Random particles on [0, 1]² of a grid of `cells`: 0 to 9 per cell (sparse cells need their neighbours).
-struct RandomParticles {
+/// Particle columns on [0, 1]² with F = diag(stretch, 1) (J = stretch), as a ParticleView.
+struct ParticleColumns {
   std::array<std::vector<double>, 2> x, v;
   std::array<std::vector<double>, 4> F;
   std::array<std::vector<double>, 3> s;
   std::vector<double> m, V0;
 
-  RandomParticles(std::array<int, 2> cells, unsigned seed) {
-    std::mt19937_64 rng(seed);
-    std::uniform_real_distribution<double> u(0.0, 1.0);
-    for (int j = 0; j < cells[1]; ++j)
-      for (int i = 0; i < cells[0]; ++i) {
-        const int count = (i * 7 + j * 3) % 10;
-        for (int k = 0; k < count; ++k) {
-          x[0].push_back((i + u(rng)) / cells[0]);
-          x[1].push_back((j + u(rng)) / cells[1]);
-          for (auto& c : v) c.push_back(u(rng) - 0.5);
-          const double stretch = 0.8 + 0.4 * u(rng);  // J = stretch, F = diag(stretch, 1)
-          F[0].push_back(stretch);
-          F[1].push_back(0.0);
-          F[2].push_back(0.0);
-          F[3].push_back(1.0);
-          for (auto& c : s) c.push_back(1e5 * (u(rng) - 0.5));
-          m.push_back(0.5 + u(rng));
-          V0.push_back(1.0 / (cells[0] * cells[1] * 9.0));
-        }
-      }
+  void add(std::array<double, 2> at, std::array<double, 2> velocity, double stretch, std::array<double, 3> stress,
+           double mass, double volume) {
+    for (int d = 0; d < 2; ++d) {
+      x[d].push_back(at[d]);
+      v[d].push_back(velocity[d]);
+    }
+    const std::array<double, 4> f{stretch, 0.0, 0.0, 1.0};
+    for (int c = 0; c < 4; ++c) F[c].push_back(f[c]);
+    for (int c = 0; c < 3; ++c) s[c].push_back(stress[c]);
+    m.push_back(mass);
+    V0.push_back(volume);
   }
   std::size_t size() const { return m.size(); }
   ParticleView<2> view() {
@@ -64,13 +56,32 @@ struct RandomParticles {
   std::array<const double*, 2> positions() const { return {x[0].data(), x[1].data()}; }
 };
 
-/// RandomParticles binned as a simulation bins them: blocks of 5 cells (the layout of the particle columns) and
-/// single cells ranked in the layout's block order.
+/// Random particles on [0, 1]² of a grid of `cells`: 0 to 9 per cell (sparse cells need their neighbours).
+struct RandomParticles : ParticleColumns {
+  RandomParticles(std::array<int, 2> cells, unsigned seed) {
+    std::mt19937_64 rng(seed);
+    std::uniform_real_distribution<double> u(0.0, 1.0);
+    for (int j = 0; j < cells[1]; ++j)
+      for (int i = 0; i < cells[0]; ++i) {
+        const int count = (i * 7 + j * 3) % 10;
+        for (int k = 0; k < count; ++k) {
+          const double x0 = (i + u(rng)) / cells[0], x1 = (j + u(rng)) / cells[1];
+          const double v0 = u(rng) - 0.5, v1 = u(rng) - 0.5;
+          const double stretch = 0.8 + 0.4 * u(rng);
+          const double s0 = 1e5 * (u(rng) - 0.5), s1 = 1e5 * (u(rng) - 0.5), s2 = 1e5 * (u(rng) - 0.5);
+          add({x0, x1}, {v0, v1}, stretch, {s0, s1, s2}, 0.5 + u(rng), 1.0 / (cells[0] * cells[1] * 9.0));
+        }
+      }
+  }
+};
+
+/// Particles binned as a simulation bins them: blocks of 5 cells (the layout of the particle columns) and single
+/// cells ranked in the layout's block order.
 struct BinnedParticles {
-  RandomParticles particles;
+  ParticleColumns particles;
   CellBins<2> layout, by_cell;
-  BinnedParticles(std::array<int, 2> cells, unsigned seed)
-      : particles(cells, seed),
+  BinnedParticles(std::array<int, 2> cells, ParticleColumns columns)
+      : particles(std::move(columns)),
         layout(cells, {1.0, 1.0}, 5),
         by_cell(CellBins<2>::single_cells_in_order_of(layout)) {
     layout.bin(particles.positions(), particles.size());
@@ -173,8 +184,8 @@ TEST_CASE("TLS rebuild of the stress alone, or of the velocity alone, equals a r
   for (int degree : {1, 2}) {
     const std::array<int, 2> cells{9, 8};
     const Scene scene = tls_scene(cells, degree);
-    BinnedParticles binned(cells, 3 + degree);
-    RandomParticles& particles = binned.particles;
+    BinnedParticles binned(cells, RandomParticles(cells, 3 + degree));
+    ParticleColumns& particles = binned.particles;
     const CellBins<2>& layout = binned.layout;
     const CellBins<2>& by_cell = binned.by_cell;
     const ParticleView<2> p = particles.view();
@@ -214,8 +225,8 @@ TEST_CASE("TLS momentum-only rebuild after a velocity change equals a full rebui
   for (int degree : {1, 2}) {
     const std::array<int, 2> cells{9, 8};
     const Scene scene = tls_scene(cells, degree);
-    BinnedParticles binned(cells, 11 + degree);
-    RandomParticles& particles = binned.particles;
+    BinnedParticles binned(cells, RandomParticles(cells, 11 + degree));
+    ParticleColumns& particles = binned.particles;
     const CellBins<2>& layout = binned.layout;
     const CellBins<2>& by_cell = binned.by_cell;
     const ParticleView<2> p = particles.view();
@@ -252,5 +263,65 @@ TEST_CASE("TLS momentum-only rebuild after a velocity change equals a full rebui
     REQUIRE(m.scale > 0.0);
     CHECK(m.diff <= 1e-14 * m.scale);
     CHECK(q.diff <= 1e-14 * q.scale);
+  }
+}
+
+TEST_CASE("TLS rebuild completes a cell whose own fit fails on its conditioning alone from its neighbours' sums",
+          "[tls][reconstruction]") {
+  // 5×5 cells of 3×3 particles, except the centre cell's 9 on its diagonal: enough of them, but collinear. No
+  // cell is sparse, so pass 1 keeps no sums; the centre's neighbourhood fit reads the sums pass 1b takes.
+  // Linear fields are reproduced by every fit; with uniform ρ the Gauss points carry σ̂ω / ρ̂ω = σ(x_g) / ρ and
+  // ρv̂ω / ρ̂ω = v(x_g), within the bounds of the cell's particles (the limiter does not act).
+  const std::array<int, 2> cells{5, 5};
+  const double h = 0.2, rho = 1000.0, volume = h * h / 9.0;
+  auto stress = [](double x, double y) { return std::array<double, 3>{1e5 * (x + y), -3e4 * (x + y), 5e3 + 2e4 * (x + y)}; };
+  auto velocity = [](double x, double y, double scale) {
+    return std::array<double, 2>{scale * (0.3 + x + y), scale * (-0.2 - 2.0 * (x + y))};
+  };
+  ParticleColumns columns;
+  for (int j = 0; j < cells[1]; ++j)
+    for (int i = 0; i < cells[0]; ++i)
+      for (int k = 0; k < 9; ++k) {
+        const bool centre = i == 2 && j == 2;
+        const double a = centre ? 0.05 + 0.1125 * k : (1 + 2 * (k % 3)) / 6.0;
+        const double b = centre ? a : (1 + 2 * (k / 3)) / 6.0;
+        const double x = (i + a) * h, y = (j + b) * h;
+        columns.add({x, y}, velocity(x, y, 1.0), 1.0, stress(x, y), rho * volume, volume);
+      }
+  for (int degree : {1, 2}) {
+    INFO("degree " << degree);
+    BinnedParticles binned(cells, columns);
+    const ParticleView<2> p = binned.particles.view();
+    const NoBodyForce body;
+    GaussPoints<2> gauss(tls_scene(cells, degree), binned.layout.block_width());
+    const std::size_t n = 25 * 4;  // 2×2 Gauss points per cell
+
+    gauss.rebuild(p, binned.by_cell, binned.layout, body, true, false);  // MUSL's first P2G: ρ and σ
+    // degree 1: the centre's stress from its neighbourhood; degree 2: every cell's (9 < 2 × 6 particles)
+    const std::size_t neighbourhood_fits = degree == 1 ? 1 : 25;
+    CHECK(gauss.fallbacks().neighbour == neighbourhood_fits);
+    CHECK(gauss.fallbacks().constant == 1);  // the centre's density: collinear particles fix no slope
+    GaussView<2> g = gauss.view();
+    double worst = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto exact = stress(g.x[0][k], g.x[1][k]);
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, std::abs(g.s[c][k] / g.m[k] * rho - exact[c]) / 1e5);
+    }
+    CHECK(worst < 1e-10);
+
+    // MUSL's second P2G: new velocities, the kept matrices
+    for (std::size_t ip = 0; ip < binned.particles.size(); ++ip) {
+      const auto v = velocity(binned.particles.x[0][ip], binned.particles.x[1][ip], -2.0);
+      for (int d = 0; d < 2; ++d) binned.particles.v[d][ip] = v[d];
+    }
+    gauss.rebuild_momentum(p, binned.by_cell, binned.layout, body);
+    CHECK(gauss.fallbacks().neighbour == 2 * neighbourhood_fits);
+    g = gauss.view();
+    worst = 0.0;
+    for (std::size_t k = 0; k < n; ++k) {
+      const auto exact = velocity(g.x[0][k], g.x[1][k], -2.0);
+      for (int d = 0; d < 2; ++d) worst = std::max(worst, std::abs(g.q[d][k] / g.m[k] - exact[d]));
+    }
+    CHECK(worst < 1e-10);
   }
 }
