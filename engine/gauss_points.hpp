@@ -411,15 +411,12 @@ void limited_values(const TaylorFit<Dim, Degree, K>& fit, Eigen::Matrix<double, 
 /// What a TLS rebuild sums per cell over the cell's own particles, in the cell's Taylor frame, in its first pass:
 /// the normal system of all K fields (ρ | v | σ | ρb, those the rebuild fits; the fits share the samples, hence D),
 /// the fields' bounds for the limiter, and the cell's mass and momentum for the constraints. The last KF fields
-/// are the unconstrained fits.
+/// are the unconstrained fits (the row sums of pass 2 hold them alone).
 template <int Dim, int Degree, int K, int KF>
 struct TlsCellSums {
   CellBox<Dim> box;         ///< the TLS cell (1D: clipped to the body)
   TaylorFrame<Dim> frame;   ///< its Taylor frame, in which the sums are taken
   TaylorNormalSystem<Dim, Degree, K> sys;
-  /// The unconstrained fields of this cell and its two neighbours along axis 0, in this cell's frame: the first
-  /// half of a separable 3×3 (1D: 3) neighbourhood sum, summed only where a neighbourhood fit needs it.
-  TaylorNormalSystem<Dim, Degree, KF> row;
   Eigen::Matrix<double, K, 1> lo = Eigen::Matrix<double, K, 1>::Zero();  ///< the fields' bounds over the cell's
   Eigen::Matrix<double, K, 1> hi = Eigen::Matrix<double, K, 1>::Zero();  ///< particles
   double mass = 0.0;
@@ -470,6 +467,9 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   std::vector<MomentumTotals<Dim>>& totals = scratch<MomentumTotals<Dim>>(ncells);
   std::vector<FallbackCounts>& counts = scratch<FallbackCounts>(ncells);
   std::vector<Sums>& sums = scratch<Sums>(ncells);
+  // The unconstrained fields of a cell and its two neighbours along axis 0, in the cell's frame: the first half of
+  // a separable 3×3 (1D: 3) neighbourhood sum, summed only where a neighbourhood fit needs it.
+  std::vector<FitSystem>& rows = scratch<FitSystem>(ncells);
   std::vector<detail::TlsKeptFit<Dim, Degree>>& kept = scratch<detail::TlsKeptFit<Dim, Degree>>(ncells);
   std::vector<std::uint8_t>& needs_neighbours = scratch<std::uint8_t>(ncells);  // the cell's own particles did not do
   if (!Fit.reuse) tls_kept_ = false;  // until this rebuild completes
@@ -540,16 +540,15 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   };
 
   // The sums of a cell's own particles (positions, ρ, v, σ, ρb as `Fit` names them) and its bounds, mass and
-  // momentum, in its Taylor frame; returns Σ m v, Σ m |v|. The view is captured by value: through the reference GCC
-  // reloaded every column pointer after each store to the sums.
-  auto sum_cell = [&, p = p](std::size_t c, Sums& cs) {
+  // momentum, in its Taylor frame; `total`: Σ m v (the momentum constraint) and Σ m |v|. The view is captured by
+  // value: through the reference GCC reloaded every column pointer after each store to the sums.
+  auto sum_cell = [&, p = p](std::size_t c, MomentumTotals<Dim>& total) {
     const auto range = cells.block_range(c);  // (clang 14 cannot capture structured bindings)
     const std::size_t begin = range.first, end = range.second;
+    Sums cs;
     cs.box = tls_box(c);
     cs.frame = TaylorFrame<Dim>(cs.box);
-    cs.sys = {};
-    MomentumTotals<Dim> total;  // Σ m v (the momentum constraint) and Σ m |v|
-    if (begin == end) return total;
+    if (begin == end) return cs;
     const TaylorFrame<Dim> frame = cs.frame;
     // locals while the particles stream in (see add_samples)
     Values lo = Values::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
@@ -589,7 +588,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     cs.hi = hi;
     cs.mass = mass;
     for (int d = 0; d < Dim; ++d) cs.momentum[d] = total.mv[d];
-    return total;
+    return cs;
   };
   // Whose sums passes 2 and 3 read: the cells within one cell of a cell with particles too few for its own fit,
   // which the bins' counts tell before any particle is read. Every other cell keeps its sums in pass 1's locals:
@@ -613,8 +612,9 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   // jumped between the colour classes of the blocks).
   layout.for_each_cell_by_block([&](std::size_t c) {
     const std::size_t s = slot(c);
-    Sums cs;
-    totals[s] = sum_cell(c, cs);
+    MomentumTotals<Dim> total;
+    const Sums cs = sum_cell(c, total);
+    totals[s] = total;
     counts[s] = FallbackCounts{};
     needs_neighbours[s] = 0;
     const bool keep = near_sparse(c);
@@ -670,7 +670,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
       if (needs_neighbours[s] || near_sparse(c)) return;  // kept in pass 1
       bool needed = false;
       for_each_cell_near(c, 1, [&](std::size_t n) { needed = needed || needs_neighbours[slot(n)]; });
-      if (needed) sum_cell(c, sums[s]);
+      MomentumTotals<Dim> unused;
+      if (needed) sums[s] = sum_cell(c, unused);
     });
 
   // Pass 2: row sums, where a neighbourhood fit of pass 3 needs them (a cell without particles may still join
@@ -690,18 +691,19 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   for_each_cell(ncells, [&](std::size_t s) {
     const std::size_t c = cell_of_slot_[s];
     if (!row_needed(c)) return;
-    Sums& cs = sums[s];
-    cs.row = cs.template fields<KR, KF>();
+    const Sums& cs = sums[s];
+    FitSystem& row = rows[s];
+    row = cs.template fields<KR, KF>();
     const TaylorFrame<Dim>& frame = cs.frame;
     for_each_neighbour_along(c, 0, [&](std::size_t n) {
       const auto& ns = sums[slot(n)].sys;
       const TaylorChange<Dim, Degree, 1u> change(frame_of(n), frame);
       // a reuse moves only the right-hand sides and Σ w ψ (D's first column), which pass 3 moves on
       if constexpr (Fit.reuse)
-        cs.row.template add_moved_rhs<true>(ns.D.col(0), ns.b.template rightCols<KF>(),
+        row.template add_moved_rhs<true>(ns.D.col(0), ns.b.template rightCols<KF>(),
                                             ns.shift.template tail<KF>(), ns.points, change, 1.0);
       else
-        cs.row.add_moved(ns.D, ns.b.template rightCols<KF>(), ns.shift.template tail<KF>(), ns.points, change, 1.0);
+        row.add_moved(ns.D, ns.b.template rightCols<KF>(), ns.shift.template tail<KF>(), ns.points, change, 1.0);
     });
   });
 
@@ -712,11 +714,11 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     const Sums& cs = sums[s];
     const TaylorFrame<Dim>& frame = cs.frame;
     auto add_neighbours = [&](FitSystem& sys) {  // own + neighbours: the rows above and below moved to this one
-      sys = cs.row;
+      sys = rows[s];
       if constexpr (Dim == 2)
         for_each_neighbour_along(c, 1, [&](std::size_t n) {
           const TaylorChange<Dim, Degree, 2u> change(frame_of(n), frame);
-          const auto& row = sums[slot(n)].row;
+          const auto& row = rows[slot(n)];
           if constexpr (Fit.reuse) sys.add_moved_rhs(row.D.col(0), row.b, row.shift, row.points, change, 1.0);
           else sys.add_moved(row, change, 1.0);
         });

@@ -333,15 +333,16 @@ inline bool own_fit(const CellBox<Dim>& cell, const TaylorNormalSystem<Dim, Degr
 /// cell's own samples (constrained: shifted by c_0, which the fit keeps). add_neighbours(sys) adds the neighbour
 /// samples to it and returns false if there are none.
 template <int Degree, int Dim, int K, class AddNeighbours>
-inline TaylorFit<Dim, Degree, K> complete_fit(const CellBox<Dim>& cell, TaylorNormalSystem<Dim, Degree, K> sys,
+inline TaylorFit<Dim, Degree, K> complete_fit(const CellBox<Dim>& cell, const TaylorNormalSystem<Dim, Degree, K>& own,
                                               bool constrained, AddNeighbours&& add_neighbours,
                                               const TlsOptions& opt) {
   TaylorFit<Dim, Degree, K> fit;
   // 1. The cell's own samples at the requested degree.
-  if (own_fit(cell, sys, constrained, opt, fit)) return fit;
+  if (own_fit(cell, own, constrained, opt, fit)) return fit;
+  TaylorNormalSystem<Dim, Degree, K> sys = own;  // the later stages add to a copy: the first copies nothing
   // Own-sample constant for the unconstrained constant stage: Σ w (f − shift) / Σ w over the cell's samples.
-  const double own_w = sys.D(0, 0);
-  const Eigen::Matrix<double, K, 1> own_b = sys.b.row(0).transpose();
+  const double own_w = own.D(0, 0);
+  const Eigen::Matrix<double, K, 1> own_b = own.b.row(0).transpose();
 
   auto done = [&](FitStage stage, int degree) {
     fit.c.row(0) += sys.shift.transpose();
