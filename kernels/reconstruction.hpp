@@ -129,53 +129,64 @@ namespace detail {
 
 /// Solves the symmetric positive semi-definite normal system D x = r (N unknowns, K right-hand sides) if D has
 /// full rank; returns false without touching x otherwise. Rank is decided by a Cholesky factorisation with
-/// diagonal pivoting (LDLᵀ) of the Jacobi-equilibrated matrix S D S (S = diag(D_ii^{-1/2})), a pivot counting as
-/// zero below `threshold` times the first (largest) one. On a semi-definite matrix the largest entry is on the
-/// diagonal and every Schur complement stays semi-definite, so this is what full pivoting would choose: a
-/// rank-revealing factorisation for such matrices. The equilibration makes the test independent of the scaling
-/// of the basis functions and of the sample weights; since D = Bᵀ W B, a relative threshold τ on D is √τ on the
-/// singular values of the sample matrix B (τ = 1e-10: columns dependent to 1e-5 count as dependent). Never
-/// detected afterwards by NaN. Written out for fixed N ≤ 6 instead of Eigen's FullPivLU, whose solve goes
-/// through the dynamic-size triangular-solve and GEMM kernels: per cell of a TLS rebuild that was a third of
-/// the reconstruction's instructions (callgrind, 2D plate, 2×2 particles per cell).
+/// diagonal pivoting (LDLᵀ) and a relative pivot test: the pivot of index i counts as zero below `threshold`
+/// times D_ii, its diagonal before elimination. That is the test on the Jacobi-equilibrated matrix S D S
+/// (S = diag(D_ii^{-1/2}), unit diagonal): its Schur complements are those of D scaled by S on both sides, so its
+/// pivots are D's divided by D_ii, and the pivot order — the largest ratio first — is the same. On a
+/// semi-definite matrix the largest entry is on the diagonal and every Schur complement stays semi-definite, so
+/// this is what full pivoting would choose: a rank-revealing factorisation for such matrices. The relative test
+/// makes the decision independent of the scaling of the basis functions and of the sample weights; since
+/// D = Bᵀ W B, a relative threshold τ on D is √τ on the singular values of the sample matrix B (τ = 1e-10:
+/// columns dependent to 1e-5 count as dependent). Never detected afterwards by NaN.
+/// Written out for fixed N ≤ 6 instead of Eigen's FullPivLU, whose solve goes through the dynamic-size
+/// triangular-solve and GEMM kernels (a third of a TLS rebuild's instructions, callgrind, 2D plate). The
+/// factorisation works on D itself, in its own index order: the equilibration as ratios needs no square roots
+/// and the pivoting as a choice of index moves no rows. Scaling D explicitly (3 square roots and 3 divisions for
+/// N = 3), a division in every Schur update and rows swapped in memory and reloaded as vectors (store-forwarding
+/// stalls) had made these solves 14 % of a 2D MUSL-TLS step with 3×3 particles per cell (perf).
 template <int N, int K, class DerivedD, class DerivedR>
 inline bool solve_full_rank(const Eigen::MatrixBase<DerivedD>& D, const Eigen::MatrixBase<DerivedR>& r,
                             double threshold, Eigen::Matrix<double, N, K>& x) {
-  Eigen::Matrix<double, N, 1> s;
+  double A[N][N], y[N][K], diagonal[N];
   for (int i = 0; i < N; ++i) {
-    if (!(D(i, i) > 0.0)) return false;  // a zero column: rank < N
-    s[i] = 1.0 / std::sqrt(D(i, i));
+    diagonal[i] = D(i, i);
+    if (!(diagonal[i] > 0.0)) return false;  // a zero column: rank < N
+    for (int j = 0; j < N; ++j) A[i][j] = D(i, j);
+    for (int k = 0; k < K; ++k) y[i][k] = r(i, k);
   }
-  Eigen::Matrix<double, N, N> A = s.asDiagonal() * D * s.asDiagonal();  // unit diagonal
-  Eigen::Matrix<double, N, K> y = s.asDiagonal() * r;
-  std::array<int, N> perm;
-  double first = 0.0;
-  for (int k = 0; k < N; ++k) {
-    int p = k;
-    for (int i = k + 1; i < N; ++i)
-      if (A(i, i) > A(p, p)) p = i;
-    if (k == 0) first = A(p, p);
-    if (!(A(p, p) > threshold * first)) return false;
-    perm[k] = p;
-    if (N > 1 && p != k) {  // symmetric swap of k and p, and of the right-hand sides (N > 1: g++ 12 warns else)
-      A.row(k).swap(A.row(p));
-      A.col(k).swap(A.col(p));
-      y.row(k).swap(y.row(p));
+  int pivot[N];            // the index eliminated at step s
+  double inverse[N];       // 1 / its pivot
+  double L[N][N];          // L[i][s]: the multiplier of index i at step s (i eliminated later)
+  bool left[N];            // not yet eliminated
+  for (int i = 0; i < N; ++i) left[i] = true;
+  for (int s = 0; s < N; ++s) {
+    int p = -1;  // the largest pivot relative to its diagonal: A_ii / d_i > A_pp / d_p without dividing
+    for (int i = 0; i < N; ++i)
+      if (left[i] && (p < 0 || A[i][i] * diagonal[p] > A[p][p] * diagonal[i])) p = i;
+    if (!(A[p][p] > threshold * diagonal[p])) return false;
+    pivot[s] = p;
+    left[p] = false;
+    inverse[s] = 1.0 / A[p][p];
+    for (int i = 0; i < N; ++i) {
+      if (!left[i]) continue;
+      const double l = A[i][p] * inverse[s];
+      L[i][s] = l;
+      for (int j = 0; j <= i; ++j)  // Schur complement, lower triangle, mirrored
+        if (left[j]) A[j][i] = A[i][j] -= l * A[p][j];
+      for (int k = 0; k < K; ++k) y[i][k] -= l * y[p][k];  // forward substitution with L, interleaved
     }
-    for (int i = k + 1; i < N; ++i)  // Schur complement (both triangles: the next pivot swap reads whole rows)
-      for (int j = k + 1; j <= i; ++j) A(j, i) = A(i, j) -= A(i, k) * A(j, k) / A(k, k);
-    for (int i = k + 1; i < N; ++i) {  // column k below the pivot becomes L(:, k)
-      A(i, k) /= A(k, k);
-      y.row(i) -= A(i, k) * y.row(k);  // forward substitution with L, interleaved
+  }
+  double z[N][K];  // D⁻¹, then back substitution with Lᵀ, in the original index order
+  for (int s = N - 1; s >= 0; --s) {
+    const int p = pivot[s];
+    for (int k = 0; k < K; ++k) {
+      double v = y[p][k] * inverse[s];
+      for (int t = s + 1; t < N; ++t) v -= L[pivot[t]][s] * z[pivot[t]][k];
+      z[p][k] = v;
     }
   }
-  for (int k = N - 1; k >= 0; --k) {  // D⁻¹, then back substitution with Lᵀ
-    y.row(k) /= A(k, k);
-    for (int i = k + 1; i < N; ++i) y.row(k) -= A(i, k) * y.row(i);
-  }
-  for (int k = N - 1; k >= 0; --k)  // undo the swaps, last first
-    if (N > 1 && perm[k] != k) y.row(k).swap(y.row(perm[k]));
-  x = s.asDiagonal() * y;
+  for (int i = 0; i < N; ++i)
+    for (int k = 0; k < K; ++k) x(i, k) = z[i][k];
   return true;
 }
 
