@@ -397,14 +397,21 @@ void limited_values(const TaylorFit<Dim, Degree, K>& fit, Eigen::Matrix<double, 
   const Eigen::Matrix<double, K, 1> mean = fit.c.row(0).transpose();
   lo = lo.cwiseMin(mean);
   hi = hi.cwiseMax(mean);
-  Eigen::Matrix<double, K, 1> alpha = Eigen::Matrix<double, K, 1>::Ones();
-  for (std::size_t g = 0; g < psi.size(); ++g) values[g] = fit.c.transpose() * psi[g];
-  for (std::size_t g = 0; g < psi.size(); ++g)
-    for (int k = 0; k < K; ++k) {
-      const double dev = values[g][k] - mean[k];
-      if (dev > 0) alpha[k] = std::min(alpha[k], (hi[k] - mean[k]) / dev);
-      if (dev < 0) alpha[k] = std::min(alpha[k], (lo[k] - mean[k]) / dev);
-    }
+  // α = min over the points of (hi − mean) / dev where dev > 0 and (lo − mean) / dev where dev < 0: each ratio
+  // falls as |dev| grows (and correctly rounded division keeps that order), so the extreme deviations alone
+  // decide — two divisions per field and no branch per point, where a branch on each point's sign mispredicted
+  Eigen::Matrix<double, K, 1> dev_max = Eigen::Matrix<double, K, 1>::Zero(), dev_min = dev_max;
+  for (std::size_t g = 0; g < psi.size(); ++g) {
+    values[g] = fit.c.transpose() * psi[g];
+    dev_max = dev_max.cwiseMax(values[g] - mean);
+    dev_min = dev_min.cwiseMin(values[g] - mean);
+  }
+  Eigen::Matrix<double, K, 1> alpha;
+  for (int k = 0; k < K; ++k) {
+    alpha[k] = 1.0;
+    if (dev_max[k] > 0) alpha[k] = std::min(alpha[k], (hi[k] - mean[k]) / dev_max[k]);
+    if (dev_min[k] < 0) alpha[k] = std::min(alpha[k], (lo[k] - mean[k]) / dev_min[k]);
+  }
   for (std::size_t g = 0; g < psi.size(); ++g) values[g] = mean + alpha.cwiseProduct(values[g] - mean);
 }
 
