@@ -19,6 +19,8 @@ CellBins<Dim>::CellBins(std::array<int, Dim> cells, std::array<double, Dim> leng
   for (int d = 0; d < Dim; ++d) {
     inv_h_[d] = cells[d] / length[d];
     nblocks_[d] = (cells[d] + block_width - 1) / block_width;
+    block_part_[d].resize(cells[d]);
+    for (int cell = 0; cell < cells[d]; ++cell) block_part_[d][cell] = static_cast<unsigned>(total * (cell / block_width));
     total *= nblocks_[d];
   }
   // colour of block (b0, b1) = (b0 mod 2) + 2 (b1 mod 2); rank blocks colour-major, row-major within a colour
@@ -74,14 +76,13 @@ void CellBins<Dim>::bin(const std::array<const double*, Dim>& x, std::size_t cou
   counts_.assign(chunks * nb, 0);
 
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-    std::size_t* cnt = counts_.data() + c * nb;
+    unsigned* cnt = counts_.data() + c * nb;
     const std::size_t end = std::min(count, (c + 1) * chunk_size);
     for (std::size_t p = c * chunk_size; p < end; ++p) {
-      std::size_t block = 0, stride = 1;
+      unsigned block = 0;
       for (int d = 0; d < Dim; ++d) {
         const int cell = std::clamp(static_cast<int>(std::floor(x[d][p] * inv_h_[d])), 0, cells_[d] - 1);
-        block += stride * (cell / block_width_);
-        stride *= nblocks_[d];
+        block += block_part_[d][cell];
       }
       const unsigned k = rank_[block];
       key_[p] = k;
@@ -90,11 +91,11 @@ void CellBins<Dim>::bin(const std::array<const double*, Dim>& x, std::size_t cou
   });
 
   // exclusive prefix over (rank, chunk): particles of one block keep their chunk order, hence stability
-  std::size_t running = 0;
+  unsigned running = 0;
   for (std::size_t k = 0; k < nb; ++k) {
     block_begin_[k] = running;
     for (std::size_t c = 0; c < chunks; ++c) {
-      const std::size_t n = counts_[c * nb + k];
+      const unsigned n = counts_[c * nb + k];
       counts_[c * nb + k] = running;
       running += n;
     }
@@ -102,7 +103,7 @@ void CellBins<Dim>::bin(const std::array<const double*, Dim>& x, std::size_t cou
   block_begin_[nb] = running;
 
   tbb::parallel_for(std::size_t(0), chunks, [&](std::size_t c) {
-    std::size_t* off = counts_.data() + c * nb;
+    unsigned* off = counts_.data() + c * nb;
     const std::size_t end = std::min(count, (c + 1) * chunk_size);
     for (std::size_t p = c * chunk_size; p < end; ++p) order_[off[key_[p]]++] = static_cast<unsigned>(p);
   });

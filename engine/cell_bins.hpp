@@ -119,13 +119,17 @@ class CellBins {
   std::array<double, Dim> inv_h_;
   std::array<int, Dim> nblocks_;
   int block_width_;
+  /// Per axis and cell along it: that axis' share of the row-major block index, stride × (cell / block width).
+  /// A table, not a division: the integer divisions by the run-time block width were most of the time of the
+  /// binning's first pass, which the single-cell bins of a reconstruction run every step.
+  std::array<std::vector<unsigned>, Dim> block_part_;
   std::vector<unsigned> rank_;          ///< colour-major rank of each block (row-major block index)
   std::vector<unsigned> block_of_rank_;  ///< the inverse: row-major index of the block of each rank
   std::array<std::size_t, (1 << Dim) + 1> colour_begin_{};
   std::vector<std::size_t> block_begin_;  ///< by rank, size blocks+1
   std::vector<unsigned> key_;           ///< block rank per particle
   std::vector<unsigned> order_;
-  std::vector<std::size_t> counts_;     ///< per chunk and rank
+  std::vector<unsigned> counts_;        ///< per chunk and rank (particle indices fit: order_ holds them)
   bool coloured_ = true;                ///< ranks are colour-major (false: single_cells_in_order_of)
 };
 
