@@ -325,3 +325,49 @@ TEST_CASE("TLS rebuild completes a cell whose own fit fails on its conditioning 
     CHECK(worst < 1e-10);
   }
 }
+
+TEST_CASE("TLS limiter: alpha from the extreme deviations equals the minimum over every Gauss point's bound",
+          "[tls][reconstruction]") {
+  // The reference is the limiter's definition: α_k = min(1, min over the points with dev > 0 of (hi − mean) / dev,
+  // min over those with dev < 0 of (lo − mean) / dev), bounds widened to the mean. limited_values takes only the
+  // extreme deviations; division is monotone, so they agree up to the round-off of evaluating the fit again here
+  // (the same expression; a compiler may contract it into FMAs differently): 1e-14 on values of order 1, where a
+  // wrong α differs by order 1.
+  constexpr int K = 3;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::array<TaylorVector<2, 1>, 4> psi;  // 2×2 Gauss points of the reference cell
+  const double g = 1.0 / std::sqrt(3.0);
+  for (int i = 0; i < 4; ++i) psi[i] = taylor_basis_ref<2, 1>(Vec<2>(i % 2 ? g : -g, i / 2 ? g : -g));
+  int limited = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    TaylorFit<2, 1, K> fit;
+    for (int i = 0; i < fit.c.size(); ++i) fit.c.data()[i] = u(rng);
+    if (trial % 7 == 0) fit.c.row(1).setZero();  // deviations of zero along x
+    if (trial % 11 == 0) fit.c.bottomRows(2).setZero();  // a constant: nothing to limit
+    Eigen::Matrix<double, K, 1> lo, hi;
+    for (int k = 0; k < K; ++k) {
+      lo[k] = fit.c(0, k) - 1.5 * std::abs(u(rng));  // sometimes tighter than the fit's range
+      hi[k] = fit.c(0, k) + 1.5 * std::abs(u(rng));
+      if (trial % 5 == 0) hi[k] = fit.c(0, k) - 0.1;  // the mean outside the samples' bounds
+    }
+    std::array<Eigen::Matrix<double, K, 1>, 4> values;
+    detail::limited_values(fit, lo, hi, std::span<const TaylorVector<2, 1>>(psi), values.data());
+
+    const Eigen::Matrix<double, K, 1> mean = fit.c.row(0).transpose();
+    const Eigen::Matrix<double, K, 1> low = lo.cwiseMin(mean), high = hi.cwiseMax(mean);
+    for (int k = 0; k < K; ++k) {
+      double alpha = 1.0;
+      std::array<double, 4> raw;
+      for (int p = 0; p < 4; ++p) {
+        raw[p] = (fit.c.transpose() * psi[p])[k];
+        const double dev = raw[p] - mean[k];
+        if (dev > 0) alpha = std::min(alpha, (high[k] - mean[k]) / dev);
+        if (dev < 0) alpha = std::min(alpha, (low[k] - mean[k]) / dev);
+      }
+      limited += alpha < 1.0;
+      for (int p = 0; p < 4; ++p) CHECK(std::abs(values[p][k] - (mean[k] + alpha * (raw[p] - mean[k]))) <= 1e-14);
+    }
+  }
+  CHECK(limited > 1000);  // the cases limit often enough to test the bound, not just the identity
+}
