@@ -20,7 +20,8 @@ CellBins<Dim>::CellBins(std::array<int, Dim> cells, std::array<double, Dim> leng
     inv_h_[d] = cells[d] / length[d];
     nblocks_[d] = (cells[d] + block_width - 1) / block_width;
     block_part_[d].resize(cells[d]);
-    for (int cell = 0; cell < cells[d]; ++cell) block_part_[d][cell] = static_cast<unsigned>(total * (cell / block_width));
+    for (int cell = 0; cell < cells[d]; ++cell)
+      block_part_[d][cell] = static_cast<unsigned>(total * (cell / block_width));
     total *= nblocks_[d];
   }
   // colour of block (b0, b1) = (b0 mod 2) + 2 (b1 mod 2); rank blocks colour-major, row-major within a colour
