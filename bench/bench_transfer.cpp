@@ -11,6 +11,11 @@
 // The two baselines live here only (DESIGN.md: they justify the coloured scheme; they are not engine code).
 // Every variant is checked against the serial result before timing.
 //
+// The reconstruction stage against direct P2G, per particle (p2g/tls): the same particles' mass, momentum and force
+// through the TLS path — single-cell binning, GaussPoints::rebuild of ρ, v and σ at 2×2 Gauss points per cell,
+// coloured scatter of the Gauss points (scatter_gauss) — as Simulation::step_with runs it for USL. With 2×2
+// particles per cell every velocity and stress fit is completed from the cell's 3×3 neighbourhood.
+//
 // G2P (gather_g2p) for the gathers the schemes use, MUSL's fused velocity-update + momentum-scatter pass
 // (advance_velocity_scatter_momentum, coloured), the stress update alone (neo-Hookean σ(F)), and the per-step
 // binning (CellBins::bin) and the every-16-steps permutation (ParticleStore::permute).
@@ -24,7 +29,9 @@
 #include <tbb/parallel_for.h>
 
 #include "bench/bench_util.hpp"
+#include "engine/gauss_points.hpp"
 #include "engine/material.hpp"
+#include "engine/scene.hpp"
 #include "kernels/transfer.hpp"
 
 namespace {
@@ -199,6 +206,48 @@ void BM_P2G(benchmark::State& state, P2G variant) {
 }
 
 // ---------------------------------------------------------------------------------------------------------------
+/// The TLS P2G of mass, momentum and force, from the particles to a finished grid (p2g/tls; compare p2g/coloured).
+void BM_P2G_TLS(benchmark::State& state) {
+  auto& ps = particle_set(state.range(0));
+  auto gc = mpm_bench::limit_threads(static_cast<int>(state.range(1)));
+  const nlohmann::json scene_json = {
+      {"dimension", 2},
+      {"grid", {{"length", {1, 1}}, {"cells", {ps.cells, ps.cells}}, {"basis", "bspline2"}}},
+      {"particles", {{"per_cell", {2, 2}}}},
+      {"bodies", {{{"box", {{0, 0}, {1, 1}}}}}},
+      {"material", {{"model", "neo-hookean"}, {"E", 1e6}, {"nu", 0.3}, {"density", 1000}}},
+      {"algorithm", {{"update", "usl"}, {"mass", "lumped"}, {"mapping", "tls"}}},
+      {"time", {{"dt", 1e-6}, {"end", 1e-6}}}};
+  mpm::GaussPoints<2> gauss(mpm::parse_scene(scene_json), ps.bins.block_width());
+  auto cells = mpm::CellBins<2>::single_cells_in_order_of(ps.bins);
+  Grid2D g(ps.functions());
+  const auto pv = ps.store.view();
+  const auto gv = g.view();
+  const std::array<const double*, 2> x{pv.x[0], pv.x[1]};
+  auto run = [&] {
+    cells.bin(x, ps.n);
+    benchmark::DoNotOptimize(gauss.rebuild(pv, cells, ps.bins, mpm::NoBodyForce{}, true, true));
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.dofs, kGridGrain), [&](const auto& r) {
+      for (auto* t : g.scatter_targets()) std::fill(t->begin() + r.begin(), t->begin() + r.end(), 0.0);
+    });
+    const auto gp = gauss.view();
+    const unsigned* gorder = gauss.bins().order().data();
+    gauss.bins().for_each_block_coloured([&](std::size_t b, std::size_t e) {
+      mpm::scatter_gauss<kAll, false, 2, 3>(ps.basis, gp, gv, gorder, b, e);
+    });
+  };
+  run();
+  for (auto _ : state) {
+    run();
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * ps.n));
+  state.counters["particles"] = static_cast<double>(ps.n);
+  state.counters["fallbacks_per_rebuild"] =
+      static_cast<double>(gauss.fallbacks().total()) / static_cast<double>(state.iterations() + 1);
+}
+
+// ---------------------------------------------------------------------------------------------------------------
 enum class G2P { usl, velocity, position_deformation, fused_velocity_momentum };
 
 template <mpm::GatherFields Fields>
@@ -331,6 +380,7 @@ const bool registered = [] {
     args(RegisterBenchmark("p2g/coloured", BM_P2G, P2G::coloured), n, {1, 2});
     args(RegisterBenchmark("p2g/atomic", BM_P2G, P2G::atomic), n, {1, 2});
     args(RegisterBenchmark("p2g/per_thread", BM_P2G, P2G::per_thread), n, {1, 2});
+    if (n <= 1'000'000) args(RegisterBenchmark("p2g/tls", BM_P2G_TLS), n, {1, 2});
   }
   const std::int64_t n = 1'000'000;
   args(RegisterBenchmark("g2p/usl", BM_G2P, G2P::usl), n, {1, 2});
