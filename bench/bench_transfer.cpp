@@ -206,6 +206,18 @@ void BM_P2G(benchmark::State& state, P2G variant) {
 }
 
 // ---------------------------------------------------------------------------------------------------------------
+/// Runs `run` once untimed (first touch of what it writes), then times it; reports particles per second.
+template <class Run>
+void time_per_particle(benchmark::State& state, Run&& run, std::size_t particles) {
+  run();
+  for (auto _ : state) {
+    run();
+    benchmark::ClobberMemory();
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * particles));
+  state.counters["particles"] = static_cast<double>(particles);
+}
+
 /// The TLS P2G of mass, momentum and force, from the particles to a finished grid (p2g/tls; compare p2g/coloured).
 void BM_P2G_TLS(benchmark::State& state) {
   auto& ps = particle_set(state.range(0));
@@ -236,13 +248,7 @@ void BM_P2G_TLS(benchmark::State& state) {
       mpm::scatter_gauss<kAll, false, 2, 3>(ps.basis, gp, gv, gorder, b, e);
     });
   };
-  run();
-  for (auto _ : state) {
-    run();
-    benchmark::ClobberMemory();
-  }
-  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * ps.n));
-  state.counters["particles"] = static_cast<double>(ps.n);
+  time_per_particle(state, run, ps.n);
   state.counters["fallbacks_per_rebuild"] =
       static_cast<double>(gauss.fallbacks().total()) / static_cast<double>(state.iterations() + 1);
 }
@@ -303,14 +309,8 @@ void BM_G2P(benchmark::State& state, G2P variant) {
       }
     }
   };
-  run();
-  for (auto _ : state) {
-    run();
-    benchmark::ClobberMemory();
-  }
+  time_per_particle(state, run, ps.n);
   if (guard.first_bad.load() != mpm::ParticleGuard::none) state.SkipWithError("a particle was flagged invalid");
-  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * ps.n));
-  state.counters["particles"] = static_cast<double>(ps.n);
 }
 
 void BM_Stress(benchmark::State& state) {
@@ -328,13 +328,7 @@ void BM_Stress(benchmark::State& state) {
       }
     });
   };
-  run();
-  for (auto _ : state) {
-    run();
-    benchmark::ClobberMemory();
-  }
-  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * ps.n));
-  state.counters["particles"] = static_cast<double>(ps.n);
+  time_per_particle(state, run, ps.n);
 }
 
 void BM_Bin(benchmark::State& state) {
