@@ -239,9 +239,7 @@ void BM_P2G_TLS(benchmark::State& state) {
   auto run = [&] {
     cells.bin(x, ps.n);
     benchmark::DoNotOptimize(gauss.rebuild(pv, cells, ps.bins, mpm::NoBodyForce{}, true, true));
-    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, g.dofs, kGridGrain), [&](const auto& r) {
-      for (auto* t : g.scatter_targets()) std::fill(t->begin() + r.begin(), t->begin() + r.end(), 0.0);
-    });
+    clear_parallel(g);
     const auto gp = gauss.view();
     const unsigned* gorder = gauss.bins().order().data();
     gauss.bins().for_each_block_coloured([&](std::size_t b, std::size_t e) {
