@@ -194,8 +194,11 @@ class GaussPoints {
   CellBox<Dim> cell_box(std::size_t c) const {
     CellBox<Dim> box;
     for (int d = 0; d < Dim; ++d) {
-      const int i = static_cast<int>(c % cells_[d]);
-      c /= cells_[d];
+      int i = static_cast<int>(c);  // the last axis' index is what is left: one division fewer
+      if (d + 1 < Dim) {
+        i = static_cast<int>(c % cells_[d]);
+        c /= cells_[d];
+      }
       box.lo[d] = i * h_[d];
       box.hi[d] = (i + 1) * h_[d];
     }
@@ -415,6 +418,14 @@ void limited_values(const TaylorFit<Dim, Degree, K>& fit, Eigen::Matrix<double, 
   for (std::size_t g = 0; g < psi.size(); ++g) values[g] = mean + alpha.cwiseProduct(values[g] - mean);
 }
 
+/// What a neighbourhood fit needs of its own cell besides the normal sums: the bounds of the unconstrained fields
+/// over the cell's particles (for the limiter) and the cell's momentum (for the momentum shift).
+template <int Dim, int KF>
+struct TlsFitBounds {
+  Eigen::Matrix<double, KF, 1> lo, hi;
+  Eigen::Matrix<double, Dim, 1> momentum;
+};
+
 /// What a TLS rebuild sums per cell over the cell's own particles, in the cell's Taylor frame, in its first pass:
 /// the normal system of all K fields (ρ | v | σ | ρb, those the rebuild fits; the fits share the samples, hence D),
 /// the fields' bounds for the limiter, and the cell's mass and momentum for the constraints. The last KF fields
@@ -428,6 +439,8 @@ struct TlsCellSums {
   Eigen::Matrix<double, K, 1> hi = Eigen::Matrix<double, K, 1>::Zero();  ///< particles
   double mass = 0.0;
   Eigen::Matrix<double, Dim, 1> momentum = Eigen::Matrix<double, Dim, 1>::Zero();
+  /// What the unconstrained fits' limiter and the momentum shift read of the cell.
+  TlsFitBounds<Dim, KF> bounds() const { return {lo.template tail<KF>(), hi.template tail<KF>(), momentum}; }
   /// Fields [first, first + count) of the system, as a system of their own.
   template <int First, int Count>
   TaylorNormalSystem<Dim, Degree, Count> fields() const {
@@ -473,10 +486,18 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   for (int d = 0; d < Dim; ++d) ncells *= cells_[d];
   std::vector<MomentumTotals<Dim>>& totals = scratch<MomentumTotals<Dim>>(ncells);
   std::vector<FallbackCounts>& counts = scratch<FallbackCounts>(ncells);
-  std::vector<Sums>& sums = scratch<Sums>(ncells);
+  // What the neighbourhood fits read of a cell, kept by passes 1 and 1b for the cells whose sums they read: the
+  // normal sums of the unconstrained fields, and the bounds and momentum. Not pass 1's whole record (box, frame,
+  // the density's sums too: 416 bytes for the stress fits of 2D), which with 2×2 particles per cell, every cell
+  // near a sparse one, was written for every cell and read back four times, and the neighbourhood passes waited
+  // on those loads.
+  std::vector<FitSystem>& near = scratch<FitSystem>(ncells);
+  std::vector<detail::TlsFitBounds<Dim, KF>>& bounds = scratch<detail::TlsFitBounds<Dim, KF>>(ncells);
   // The unconstrained fields of a cell and its two neighbours along axis 0, in the cell's frame: the first half of
-  // a separable 3×3 (1D: 3) neighbourhood sum, summed only where a neighbourhood fit needs it.
-  std::vector<FitSystem>& rows = scratch<FitSystem>(ncells);
+  // a separable 3×3 (1D: 3) neighbourhood sum, summed only where a neighbourhood fit needs it. (A type of its own:
+  // the scratch is one store per type.)
+  struct RowSums : FitSystem {};
+  std::vector<RowSums>& rows = scratch<RowSums>(ncells);
   std::vector<detail::TlsKeptFit<Dim, Degree>>& kept = scratch<detail::TlsKeptFit<Dim, Degree>>(ncells);
   std::vector<std::uint8_t>& needs_neighbours = scratch<std::uint8_t>(ncells);  // the cell's own particles did not do
   if (!Fit.reuse) tls_kept_ = false;  // until this rebuild completes
@@ -494,7 +515,10 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     return box;
   };
   // the per-cell scratch is indexed by slot (see slot())
-  auto frame_of = [&](std::size_t c) -> const TaylorFrame<Dim>& { return sums[slot(c)].frame; };
+  auto keep_sums = [&](std::size_t s, const Sums& cs) {
+    near[s] = cs.template fields<KR, KF>();
+    bounds[s] = cs.bounds();
+  };
   // The Gauss points sit at the same place of every TLS cell (1D: of its occupied part): ξ = 2 local − 1.
   std::array<TaylorVector<Dim, Degree>, max_per_cell> psi_buffer;
   for (int g = 0; g < per_cell_; ++g) {
@@ -517,12 +541,12 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   opt.rank_threshold = own_fit_pivot;
 
   // The limiter and the Gauss-point values of a cell's unconstrained fit.
-  auto write_fit = [&](std::size_t c, const Sums& cs, const TaylorFit<Dim, Degree, KF>& fit) {
+  auto write_fit = [&](std::size_t c, const CellBox<Dim>& box, const detail::TlsFitBounds<Dim, KF>& cb,
+                       const TaylorFit<Dim, Degree, KF>& fit) {
     const std::size_t first = first_point(c);
-    const double volume = cs.box.volume();
+    const double volume = box.volume();
     std::array<FitValues, max_per_cell> values;
-    detail::limited_values(fit, cs.lo.template tail<KF>().eval(), cs.hi.template tail<KF>().eval(), psi,
-                           values.data());
+    detail::limited_values(fit, cb.lo, cb.hi, psi, values.data());
     // Momentum as ρ̂ v̂, not a fit of ρv (beyond the thesis, which fits ρv, eq. 5.9): v̂ is bounded by the cell's
     // particle velocities, so a nodal velocity Σφρ̂v̂ω / Σφρ̂ω is a weighted mean of bounded values even where the
     // nodal mass is tiny. Fitting ρ and ρv apart let their ratio run away at such nodes (v ≈ 2e4 m/s on the
@@ -534,7 +558,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
         m_g += m_[first + g];
         q_g += m_[first + g] * values[g].template head<Dim>();
       }
-      const Eigen::Matrix<double, Dim, 1> shift = (cs.momentum - q_g) / m_g;
+      const Eigen::Matrix<double, Dim, 1> shift = (cb.momentum - q_g) / m_g;
       for (int g = 0; g < per_cell_; ++g)
         for (int d = 0; d < Dim; ++d) q_[d][first + g] = m_[first + g] * (values[g][d] + shift[d]);
     }
@@ -625,7 +649,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     counts[s] = FallbackCounts{};
     needs_neighbours[s] = 0;
     const bool keep = near_sparse(c);
-    if (keep) sums[s] = cs;
+    if (keep) keep_sums(s, cs);
     if constexpr (!Fit.reuse) kept[s].own_D = cs.sys.D;
     const std::size_t first = first_point(c);
     if (cs.sys.points == 0) {  // an empty cell carries nothing: nothing to conserve there
@@ -660,12 +684,12 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
 
     TaylorFit<Dim, Degree, KF> fit;
     if (cs.sys.points >= enough_points && detail::own_fit(box, cs.template fields<KR, KF>(), false, opt, fit)) {
-      write_fit(c, cs, fit);
+      write_fit(c, box, cs.bounds(), fit);
       return;
     }
     needs_neighbours[s] = 1;
     if (keep) return;
-    sums[s] = cs;
+    keep_sums(s, cs);
     conditioning_failed.store(true, std::memory_order_relaxed);
   });
 
@@ -678,7 +702,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
       bool needed = false;
       for_each_cell_near(c, 1, [&](std::size_t n) { needed = needed || needs_neighbours[slot(n)]; });
       MomentumTotals<Dim> unused;
-      if (needed) sums[s] = sum_cell(c, unused);
+      if (needed) keep_sums(s, sum_cell(c, unused));
     });
 
   // Pass 2: row sums, where a neighbourhood fit of pass 3 needs them (a cell without particles may still join
@@ -698,19 +722,17 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   for_each_cell(ncells, [&](std::size_t s) {
     const std::size_t c = cell_of_slot_[s];
     if (!row_needed(c)) return;
-    const Sums& cs = sums[s];
     FitSystem& row = rows[s];
-    row = cs.template fields<KR, KF>();
-    const TaylorFrame<Dim>& frame = cs.frame;
+    row = near[s];
+    const TaylorFrame<Dim> frame(tls_box(c));
     for_each_neighbour_along(c, 0, [&](std::size_t n) {
-      const auto& ns = sums[slot(n)].sys;
-      const TaylorChange<Dim, Degree, 1u> change(frame_of(n), frame);
+      const FitSystem& ns = near[slot(n)];
+      const TaylorChange<Dim, Degree, 1u> change(TaylorFrame<Dim>(tls_box(n)), frame);
       // a reuse moves only the right-hand sides and Σ w ψ (D's first column), which pass 3 moves on
       if constexpr (Fit.reuse)
-        row.template add_moved_rhs<true>(ns.D.col(0), ns.b.template rightCols<KF>(),
-                                            ns.shift.template tail<KF>(), ns.points, change, 1.0);
+        row.template add_moved_rhs<true>(ns.D.col(0), ns.b, ns.shift, ns.points, change, 1.0);
       else
-        row.add_moved(ns.D, ns.b.template rightCols<KF>(), ns.shift.template tail<KF>(), ns.points, change, 1.0);
+        row.add_moved(ns, change, 1.0);
     });
   });
 
@@ -718,29 +740,30 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   for_each_cell(ncells, [&](std::size_t s) {
     if (!needs_neighbours[s]) return;
     const std::size_t c = cell_of_slot_[s];
-    const Sums& cs = sums[s];
-    const TaylorFrame<Dim>& frame = cs.frame;
+    const CellBox<Dim> box = tls_box(c);
+    const TaylorFrame<Dim> frame(box);
+    const FitSystem& own = near[s];
     auto add_neighbours = [&](FitSystem& sys) {  // own + neighbours: the rows above and below moved to this one
       sys = rows[s];
       if constexpr (Dim == 2)
         for_each_neighbour_along(c, 1, [&](std::size_t n) {
-          const TaylorChange<Dim, Degree, 2u> change(frame_of(n), frame);
-          const auto& row = rows[slot(n)];
+          const TaylorChange<Dim, Degree, 2u> change(TaylorFrame<Dim>(tls_box(n)), frame);
+          const FitSystem& row = rows[slot(n)];
           if constexpr (Fit.reuse) sys.add_moved_rhs(row.D.col(0), row.b, row.shift, row.points, change, 1.0);
           else sys.add_moved(row, change, 1.0);
         });
       if constexpr (Fit.reuse) sys.D = kept[s].neighbourhood_D;  // the same positions: the same matrix
       else kept[s].neighbourhood_D = sys.D;
-      return sys.points > cs.sys.points;
+      return sys.points > own.points;
     };
-    auto fit_sys = cs.template fields<KR, KF>();
-    const bool enough = cs.sys.points >= enough_points;
+    FitSystem fit_sys = own;
+    const bool enough = own.points >= enough_points;
     if (!enough) add_neighbours(fit_sys);
-    auto fit = detail::complete_fit<Degree>(cs.box, fit_sys, false,
+    auto fit = detail::complete_fit<Degree>(box, fit_sys, false,
                                             [&](auto& sys) { return enough && add_neighbours(sys); }, opt);
     if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
     counts[s].add(fit.status);
-    write_fit(c, cs, fit);
+    write_fit(c, box, bounds[s], fit);
   });
   for (const auto& c : counts) fallbacks_ += c;
   tls_kept_ = true;
