@@ -191,7 +191,9 @@ class GaussPoints {
     for (int d = 0; d < Dim; ++d) q_[d][g] = fb_[d][g] = 0.0;
     for (auto& col : s_) col[g] = 0.0;
   }
-  CellBox<Dim> cell_box(std::size_t c) const {
+  /// Inlined: the neighbourhood fits take their neighbours' frames from it, where the call had been 2 % of a 2×2
+  /// TLS step.
+  MPM_INLINE CellBox<Dim> cell_box(std::size_t c) const {
     CellBox<Dim> box;
     for (int d = 0; d < Dim; ++d) {
       int i = static_cast<int>(c);  // the last axis' index is what is left: one division fewer
@@ -756,9 +758,10 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
       else kept[s].neighbourhood_D = sys.D;
       return sys.points > own.points;
     };
-    FitSystem fit_sys = own;
     const bool enough = own.points >= enough_points;
-    if (!enough) add_neighbours(fit_sys);
+    FitSystem fit_sys;
+    if (enough) fit_sys = own;
+    else add_neighbours(fit_sys);
     auto fit = detail::complete_fit<Degree>(box, fit_sys, false,
                                             [&](auto& sys) { return enough && add_neighbours(sys); }, opt);
     if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
