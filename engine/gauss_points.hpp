@@ -780,10 +780,9 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_mls(const ParticleView<Dim>& p, co
                                                   const Body& body, bool stress) {
   constexpr int KM = 1 + Dim, KS = sym_components<Dim> + Dim;
   const ParticleFields<Dim, Body> fields{&p, &body};
-  auto mass_of = [&](std::size_t ip) { return fields.mass(ip); };
-  auto stress_of = [&](std::size_t ip) { return fields.stress(ip); };
   std::size_t ncells = 1;
   for (int d = 0; d < Dim; ++d) ncells *= cells_[d];
+  const std::size_t np = cells.order().size();
   std::vector<MomentumTotals<Dim>> totals(ncells);
   std::vector<FallbackCounts> counts(ncells);
   const unsigned* order = cells.order().data();
@@ -792,39 +791,55 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_mls(const ParticleView<Dim>& p, co
   Vec<Dim> h;
   for (int d = 0; d < Dim; ++d) h[d] = h_[d];
 
-  for_each_cell(ncells, [&](std::size_t c) {
-    const auto own_range = cells.block_range(c);
-    const std::size_t first = first_point(c);
-    for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
-    if (own_range.first == own_range.second) return;
-    for (std::size_t k = own_range.first; k < own_range.second; ++k) {
-      const std::size_t ip = order[k];
-      double v[Dim];
-      for (int d = 0; d < Dim; ++d) v[d] = p.v[d][ip];
-      totals[c].add(p.m[ip], v);
-    }
-    detail::ParticleRanges<Dim, KM, decltype(mass_of)> src{&p, order, mass_of};
-    detail::ParticleRanges<Dim, KS, decltype(stress_of)> src_s{&p, order, stress_of};
-    for_each_cell_near(c, reach, [&](std::size_t n) {
-      src.add(cells.block_range(n));
-      src_s.add(cells.block_range(n));
+  // K fields per particle: ρ, ρv, and σ, ρb when the stress is fitted.
+  auto fit = [&]<int K>() {
+    // Each particle's fields once per rebuild: the sums below visit a particle once for every Gauss point of the
+    // cells around it (4 × 49 times with 2×2 Gauss points and the printed support), and computing its fields at
+    // each visit (a determinant, a division, the plate's body force with its sines and cosines) was most of
+    // the time of an MLS step.
+    using Values = Eigen::Matrix<double, K, 1>;
+    std::vector<Values>& values = scratch<Values>(np);
+    parallel_over(np, 4096, [&](std::size_t b, std::size_t e) {
+      for (std::size_t ip = b; ip < e; ++ip) {
+        values[ip].template head<KM>() = fields.mass(ip);
+        if constexpr (K > KM) values[ip].template tail<KS>() = fields.stress(ip);
+      }
     });
-    const double volume = cell_box(c).volume();
-    for (int g = 0; g < per_cell_; ++g) {
-      Vec<Dim> xg;
-      for (int d = 0; d < Dim; ++d) xg[d] = x_[d][first + g];
-      const double w = local_w_[g] * volume;
-      const auto val = mls_value(xg, h, src, opt);  // paper eq. 13
-      counts[c].add(val.status);
-      m_[first + g] = w * val.value[0];
-      for (int d = 0; d < Dim; ++d) q_[d][first + g] = w * val.value[1 + d];
-      if (!stress) continue;
-      const auto sv = mls_value(xg, h, src_s, opt);
-      counts[c].add(sv.status);
-      for (int k = 0; k < sym_components<Dim>; ++k) s_[k][first + g] = w * sv.value[k];
-      for (int d = 0; d < Dim; ++d) fb_[d][first + g] = w * sv.value[sym_components<Dim> + d];
-    }
-  });
+    auto value_of = [&](std::size_t ip) -> const Values& { return values[ip]; };
+    for_each_cell(ncells, [&](std::size_t c) {
+      const auto own_range = cells.block_range(c);
+      const std::size_t first = first_point(c);
+      for (int g = 0; g < per_cell_; ++g) clear_point(first + g);
+      if (own_range.first == own_range.second) return;
+      for (std::size_t k = own_range.first; k < own_range.second; ++k) {
+        const std::size_t ip = order[k];
+        double v[Dim];
+        for (int d = 0; d < Dim; ++d) v[d] = p.v[d][ip];
+        totals[c].add(p.m[ip], v);
+      }
+      detail::ParticleRanges<Dim, K, decltype(value_of)> src{&p, order, value_of};
+      for_each_cell_near(c, reach, [&](std::size_t n) { src.add(cells.block_range(n)); });
+      const double volume = cell_box(c).volume();
+      for (int g = 0; g < per_cell_; ++g) {
+        Vec<Dim> xg;
+        for (int d = 0; d < Dim; ++d) xg[d] = x_[d][first + g];
+        const double w = local_w_[g] * volume;
+        // One moment matrix A for all fields (paper eq. 10 depends on the positions and weights only): the mass
+        // and the stress fits share it, so they are one solve with K right-hand sides and the same outcome.
+        const auto val = mls_value(xg, h, src, opt);  // paper eq. 13
+        counts[c].add(val.status);
+        m_[first + g] = w * val.value[0];
+        for (int d = 0; d < Dim; ++d) q_[d][first + g] = w * val.value[1 + d];
+        if constexpr (K > KM) {
+          counts[c].add(val.status);  // the stress fit, counted as it was when it had a solve of its own
+          for (int k = 0; k < sym_components<Dim>; ++k) s_[k][first + g] = w * val.value[KM + k];
+          for (int d = 0; d < Dim; ++d) fb_[d][first + g] = w * val.value[KM + sym_components<Dim> + d];
+        }
+      }
+    });
+  };
+  if (stress) fit.template operator()<KM + KS>();
+  else fit.template operator()<KM>();
   for (const auto& c : counts) fallbacks_ += c;
   return sum_totals(totals);
 }
