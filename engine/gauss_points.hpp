@@ -479,7 +479,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   constexpr int K = KR + KF;
   static_assert(KF > 0, "a TLS rebuild fits the velocity or the stress");
   static_assert(!Fit.reuse || (Fit.velocity && !Fit.stress), "a reuse refits the velocity alone");
-  constexpr std::size_t enough_points = 2 * static_cast<std::size_t>(taylor_size<Dim>(Degree));
+  constexpr std::size_t enough_points = static_cast<std::size_t>(taylor_size<Dim>(Degree)) + 1;
   using Sums = detail::TlsCellSums<Dim, Degree, K, KF>;
   using Values = Eigen::Matrix<double, K, 1>;  // what a particle gives: ρ | v | σ | ρb
   using FitValues = Eigen::Matrix<double, KF, 1>;
@@ -531,13 +531,15 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   const std::span<const TaylorVector<Dim, Degree>> psi(psi_buffer.data(), per_cell_);
 
   // The unconstrained fits (velocity, stress) have no integral to anchor them. From its own particles alone a cell
-  // fits them only with at least two samples per Taylor function and a well-conditioned normal matrix (relative
-  // pivot ≥ 1e-3 after equilibration, not just full rank); otherwise it fits the same degree to its own and its 8
-  // neighbours' particles (thesis §5.2.3, Fig. 5.7; a `neighbour` fallback). Measured on the plate at A = 0.1
-  // (docs/RECONSTRUCTION.md): a constant stress per cell under-integrates the force (64², 2×2 particles: u error
-  // 24 % of A at A = 0.05); a linear fit through 4 particles blows up (exit 3), and so does one through 6 (3×2)
-  // whose layout compression has flattened; requiring 3 samples per function instead of the conditioning test
-  // also completes but stalls at 64² (2×2: u 2.0e-3 → 1.6e-3, against 1.7e-3 → 5.1e-4 with this rule).
+  // fits them only with one sample more than it has Taylor functions (a residual to spare: 2D linear, 4 particles)
+  // and a well-conditioned normal matrix (relative pivot ≥ 1e-3 after equilibration, not just full rank);
+  // otherwise it fits the same degree to its own and its 8 neighbours' particles (thesis §5.2.3, Fig. 5.7; a
+  // `neighbour` fallback). Measured on the plate (docs/RECONSTRUCTION.md): a constant stress per cell
+  // under-integrates the force (64², 2×2 particles: u error 24 % of A at A = 0.05); a linear fit through 4
+  // particles without the conditioning test blows up (exit 3), and so does one through 6 (3×2) whose layout
+  // compression has flattened. With the test, requiring 2 samples per function (every fit of a 2×2 layout a
+  // neighbourhood fit) made the 2×2 step 1.3x slower and was less accurate at A = 0.1 (64², 2×2: σ 1.14e6 against
+  // 5.8e5), though more at A = 0.05 (64², 2×2: v 2.5 against 3.6).
   constexpr double own_fit_pivot = 1e-3;
   TlsOptions opt;
   opt.rank_threshold = own_fit_pivot;
