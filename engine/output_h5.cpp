@@ -406,7 +406,8 @@ struct H5Writer::State {
         << "        <Geometry GeometryType=\"" << (ncoord == 3 ? "X_Y_Z" : "X_Y") << "\">\n";
       std::set<std::string> coords;
       for (int i = 0; i < ncoord; ++i) {
-        const std::string c = "x" + std::to_string(i);
+        std::string c = "x";  // appended, not `"x" + to_string(i)`: that form trips GCC 12's false -Wrestrict
+        c += std::to_string(i);
         const bool have = std::find(g.columns.begin(), g.columns.end(), c) != g.columns.end();
         x << (have ? data_item(base + c, g.n, g.n, false, in)
                    : data_item(h5 + "/xdmf/zeros", g.n, zeros_size, false, in));
