@@ -144,51 +144,82 @@ namespace detail {
 /// and the pivoting as a choice of index moves no rows. Scaling D explicitly (3 square roots and 3 divisions for
 /// N = 3), a division in every Schur update and rows swapped in memory and reloaded as vectors (store-forwarding
 /// stalls) had made these solves 14 % of a 2D MUSL-TLS step with 3×3 particles per cell (perf).
+template <int N>
+struct PivotedLdlt;
+
 template <int N, int K, class DerivedD, class DerivedR>
 inline bool solve_full_rank(const Eigen::MatrixBase<DerivedD>& D, const Eigen::MatrixBase<DerivedR>& r,
                             double threshold, Eigen::Matrix<double, N, K>& x) {
-  double A[N][N], y[N][K], diagonal[N];
-  for (int i = 0; i < N; ++i) {
-    diagonal[i] = D(i, i);
-    if (!(diagonal[i] > 0.0)) return false;  // a zero column: rank < N
-    for (int j = 0; j < N; ++j) A[i][j] = D(i, j);
-    for (int k = 0; k < K; ++k) y[i][k] = r(i, k);
-  }
-  int pivot[N];            // the index eliminated at step s
-  double inverse[N];       // 1 / its pivot
-  double L[N][N];          // L[i][s]: the multiplier of index i at step s (i eliminated later)
-  bool left[N];            // not yet eliminated
-  for (int i = 0; i < N; ++i) left[i] = true;
-  for (int s = 0; s < N; ++s) {
-    int p = -1;  // the largest pivot relative to its diagonal: A_ii / d_i > A_pp / d_p without dividing
-    for (int i = 0; i < N; ++i)
-      if (left[i] && (p < 0 || A[i][i] * diagonal[p] > A[p][p] * diagonal[i])) p = i;
-    if (!(A[p][p] > threshold * diagonal[p])) return false;
-    pivot[s] = p;
-    left[p] = false;
-    inverse[s] = 1.0 / A[p][p];
-    for (int i = 0; i < N; ++i) {
-      if (!left[i]) continue;
-      const double l = A[i][p] * inverse[s];
-      L[i][s] = l;
-      for (int j = 0; j <= i; ++j)  // Schur complement, lower triangle, mirrored
-        if (left[j]) A[j][i] = A[i][j] -= l * A[p][j];
-      for (int k = 0; k < K; ++k) y[i][k] -= l * y[p][k];  // forward substitution with L, interleaved
-    }
-  }
-  double z[N][K];  // D⁻¹, then back substitution with Lᵀ, in the original index order
-  for (int s = N - 1; s >= 0; --s) {
-    const int p = pivot[s];
-    for (int k = 0; k < K; ++k) {
-      double v = y[p][k] * inverse[s];
-      for (int t = s + 1; t < N; ++t) v -= L[pivot[t]][s] * z[pivot[t]][k];
-      z[p][k] = v;
-    }
-  }
-  for (int i = 0; i < N; ++i)
-    for (int k = 0; k < K; ++k) x(i, k) = z[i][k];
+  PivotedLdlt<N> f;
+  if (!f.factor(D, threshold)) return false;
+  f.solve(r, x);
   return true;
 }
+
+/// The factors of solve_full_rank's pivoted LDLᵀ, kept to solve for other right-hand sides with the same D (a
+/// momentum-only TLS rebuild refits the velocity on the positions of the rebuild before it). factor() then
+/// solve() is solve_full_rank, operation for operation: the forward substitution, interleaved with the
+/// elimination there, applies the same multipliers to each right-hand side in the same order of steps.
+template <int N>
+struct PivotedLdlt {
+  std::uint8_t pivot[N];        ///< the index eliminated at step s
+  double inverse[N];            ///< 1 / its pivot
+  double multiplier[N][N];      ///< [t][s], t > s: the multiplier at step s of the index eliminated at step t
+
+  /// Factorises D; false when its rank is below N by the relative test of solve_full_rank (factors undefined).
+  template <class DerivedD>
+  bool factor(const Eigen::MatrixBase<DerivedD>& D, double threshold) {
+    double A[N][N], diagonal[N];
+    for (int i = 0; i < N; ++i) {
+      diagonal[i] = D(i, i);
+      if (!(diagonal[i] > 0.0)) return false;  // a zero column: rank < N
+      for (int j = 0; j < N; ++j) A[i][j] = D(i, j);
+    }
+    double L[N][N];  // L[i][s]: the multiplier of index i at step s (i eliminated later)
+    bool left[N];    // not yet eliminated
+    int step_of[N];  // the step that eliminates index i
+    for (int i = 0; i < N; ++i) left[i] = true;
+    for (int s = 0; s < N; ++s) {
+      int p = -1;  // the largest pivot relative to its diagonal: A_ii / d_i > A_pp / d_p without dividing
+      for (int i = 0; i < N; ++i)
+        if (left[i] && (p < 0 || A[i][i] * diagonal[p] > A[p][p] * diagonal[i])) p = i;
+      if (!(A[p][p] > threshold * diagonal[p])) return false;
+      pivot[s] = static_cast<std::uint8_t>(p);
+      step_of[p] = s;
+      left[p] = false;
+      inverse[s] = 1.0 / A[p][p];
+      for (int i = 0; i < N; ++i) {
+        if (!left[i]) continue;
+        const double l = A[i][p] * inverse[s];
+        L[i][s] = l;
+        for (int j = 0; j <= i; ++j)  // Schur complement, lower triangle, mirrored
+          if (left[j]) A[j][i] = A[i][j] -= l * A[p][j];
+      }
+    }
+    for (int i = 0; i < N; ++i)
+      for (int s = 0; s < step_of[i]; ++s) multiplier[step_of[i]][s] = L[i][s];
+    return true;
+  }
+
+  /// x = D⁻¹ r for K right-hand sides.
+  template <int K, class DerivedR>
+  void solve(const Eigen::MatrixBase<DerivedR>& r, Eigen::Matrix<double, N, K>& x) const {
+    double y[N][K];  // in step order
+    for (int s = 0; s < N; ++s)
+      for (int k = 0; k < K; ++k) y[s][k] = r(pivot[s], k);
+    for (int s = 0; s < N; ++s)  // forward substitution with L
+      for (int t = s + 1; t < N; ++t)
+        for (int k = 0; k < K; ++k) y[t][k] -= multiplier[t][s] * y[s][k];
+    for (int s = N - 1; s >= 0; --s)  // D⁻¹, then back substitution with Lᵀ
+      for (int k = 0; k < K; ++k) {
+        double v = y[s][k] * inverse[s];
+        for (int t = s + 1; t < N; ++t) v -= multiplier[t][s] * y[t][k];
+        y[s][k] = v;
+      }
+    for (int s = 0; s < N; ++s)
+      for (int k = 0; k < K; ++k) x(pivot[s], k) = y[s][k];
+  }
+};
 
 }  // namespace detail
 

@@ -315,6 +315,14 @@ struct TaylorNormalSystem {
   }
 };
 
+/// A fit to the cell's own samples, its coefficients solved for: the shift added back to c_0, the stage recorded.
+template <int Dim, int Degree, int K, class DerivedS>
+inline void complete_own_fit(TaylorFit<Dim, Degree, K>& fit, const Eigen::MatrixBase<DerivedS>& shift,
+                             std::size_t points) {
+  fit.c.row(0) += shift.transpose();
+  fit.status = {FitStage::full, Degree, points};
+}
+
 /// Stage 1 of the completion order alone: the fit to the cell's own samples (`sys`) at the requested degree
 /// (constrained: c_0 is the shift). False, `fit` undefined, when they do not determine it: the caller completes
 /// with complete_fit.
@@ -324,9 +332,20 @@ inline bool own_fit(const CellBox<Dim>& cell, const TaylorNormalSystem<Dim, Degr
   fit.cell = cell;
   if (!(constrained ? sys.template solve<Degree, true>(opt, fit.c) : sys.template solve<Degree, false>(opt, fit.c)))
     return false;
-  fit.c.row(0) += sys.shift.transpose();
-  fit.status = {FitStage::full, Degree, sys.points};
+  complete_own_fit(fit, sys.shift, sys.points);
   return true;
+}
+
+/// own_fit's unconstrained fit from the factors of the samples' D (PivotedLdlt::factor, with the rank test
+/// own_fit would apply): the same numbers, for the right-hand sides `b` (shifted by `shift`) of `points` samples.
+/// A caller that fits other values at the same positions factorises D once.
+template <int Degree, int Dim, int K, class DerivedB, class DerivedS>
+inline void fit_with(const CellBox<Dim>& cell, const PivotedLdlt<taylor_size<Dim>(Degree)>& factors,
+                     const Eigen::MatrixBase<DerivedB>& b, const Eigen::MatrixBase<DerivedS>& shift,
+                     std::size_t points, TaylorFit<Dim, Degree, K>& fit) {
+  fit.cell = cell;
+  factors.solve(b, fit.c);
+  complete_own_fit(fit, shift, points);
 }
 
 /// The completion order shared by the constrained and the unconstrained fit, on a normal system that holds the
