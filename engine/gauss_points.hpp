@@ -24,6 +24,8 @@
 #include <stdexcept>
 #include <vector>
 
+#include <tbb/enumerable_thread_specific.h>
+
 #include "engine/body_extent.hpp"
 #include "engine/cell_bins.hpp"
 #include "engine/parallel_over.hpp"
@@ -459,14 +461,20 @@ struct TlsCellSums {
 /// What a TLS rebuild keeps of a cell for a later momentum-only rebuild of the same particle positions
 /// (GaussPoints::rebuild_momentum), all of which depends on the positions only: the density fit's outcome (its
 /// values stay at the Gauss points); whether the cell's own particles determined its fit, and then the factors
-/// of their normal matrix (refactorising it was 4.5 % of a 2×2 MUSL-TLS step); the own normal matrix where the
-/// neighbourhood fits read the cell's sums, and the neighbourhood fit's.
+/// of their normal matrix (refactorising it was 4.5 % of a 2×2 MUSL-TLS step). 72 bytes in 2D at degree 1.
 template <int Dim, int Degree>
 struct TlsKeptFit {
-  static constexpr int N = taylor_size<Dim>(Degree);
   FitStatus rho;
   bool own_fitted = false;
-  PivotedLdlt<N> own_factors;
+  PivotedLdlt<taylor_size<Dim>(Degree)> own_factors;
+};
+
+/// The same for the cells whose sums the neighbourhood fits read: their own normal matrix and, for those fitted
+/// to their neighbourhood, its matrix. Apart from TlsKeptFit, which every cell writes: with these in it, the
+/// record of every cell was 216 bytes, most of them unused.
+template <int Dim, int Degree>
+struct TlsKeptMatrices {
+  static constexpr int N = taylor_size<Dim>(Degree);
   Eigen::Matrix<double, N, N> own_D, neighbourhood_D;
 };
 
@@ -491,8 +499,13 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   using FitSystem = detail::TaylorNormalSystem<Dim, Degree, KF>;
   std::size_t ncells = 1;
   for (int d = 0; d < Dim; ++d) ncells *= cells_[d];
-  std::vector<MomentumTotals<Dim>>& totals = scratch<MomentumTotals<Dim>>(ncells);
-  std::vector<FallbackCounts>& counts = scratch<FallbackCounts>(ncells);
+  std::vector<MomentumTotals<Dim>>& totals = scratch<MomentumTotals<Dim>>(ncells);  // written when Fit.velocity
+  // Fallbacks are counted per thread (integers: the same sum for any partition), and a fit without one costs a
+  // comparison: a count per cell was written by every cell and summed serially.
+  tbb::enumerable_thread_specific<FallbackCounts> counts;
+  auto count = [&](const FitStatus& status) {
+    if (status.stage != FitStage::full) counts.local().add(status);
+  };
   // What the neighbourhood fits read of a cell, kept by passes 1 and 1b for the cells whose sums they read: the
   // normal sums of the unconstrained fields, and the bounds and momentum. Not pass 1's whole record (box, frame,
   // the density's sums too: 416 bytes for the stress fits of 2D), which with 2×2 particles per cell, every cell
@@ -506,6 +519,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   struct RowSums : FitSystem {};
   std::vector<RowSums>& rows = scratch<RowSums>(ncells);
   std::vector<detail::TlsKeptFit<Dim, Degree>>& kept = scratch<detail::TlsKeptFit<Dim, Degree>>(ncells);
+  std::vector<detail::TlsKeptMatrices<Dim, Degree>>& kept_matrices =
+      scratch<detail::TlsKeptMatrices<Dim, Degree>>(ncells);
   std::vector<std::uint8_t>& needs_neighbours = scratch<std::uint8_t>(ncells);  // the cell's own particles did not do
   if (!Fit.reuse) tls_kept_ = false;  // until this rebuild completes
   const unsigned* order = cells.order().data();
@@ -525,8 +540,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   auto keep_sums = [&](std::size_t s, const Sums& cs) {
     near[s] = cs.template fields<KR, KF>();
     bounds[s] = cs.bounds();
-    if constexpr (Fit.reuse) near[s].D = kept[s].own_D;  // a reuse sums no D (add_samples<false>)
-    else kept[s].own_D = cs.sys.D;
+    if constexpr (Fit.reuse) near[s].D = kept_matrices[s].own_D;  // a reuse sums no D (add_samples<false>)
+    else kept_matrices[s].own_D = cs.sys.D;
   };
   // The Gauss points sit at the same place of every TLS cell (1D: of its occupied part): ξ = 2 local − 1.
   std::array<TaylorVector<Dim, Degree>, max_per_cell> psi_buffer;
@@ -662,8 +677,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     const std::size_t s = slot(c);
     MomentumTotals<Dim> total;
     const Sums cs = sum_cell(c, total);
-    totals[s] = total;
-    counts[s] = FallbackCounts{};
+    if constexpr (Fit.velocity) totals[s] = total;
     needs_neighbours[s] = 0;
     const bool keep = near_sparse(c);
     if (keep) keep_sums(s, cs);
@@ -696,7 +710,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
                              rho.data());
       for (int g = 0; g < per_cell_; ++g) m_[first + g] = local_w_[g] * volume * rho[g][0];
     }
-    counts[s].add(kept[s].rho);
+    count(kept[s].rho);
 
     // the own fit as detail::own_fit would make it, through factors a reuse keeps
     detail::TlsKeptFit<Dim, Degree>& k = kept[s];
@@ -774,8 +788,8 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
           if constexpr (Fit.reuse) sys.add_moved_rhs(row.D.col(0), row.b, row.shift, row.points, change, 1.0);
           else sys.add_moved(row, change, 1.0);
         });
-      if constexpr (Fit.reuse) sys.D = kept[s].neighbourhood_D;  // the same positions: the same matrix
-      else kept[s].neighbourhood_D = sys.D;
+      if constexpr (Fit.reuse) sys.D = kept_matrices[s].neighbourhood_D;  // the same positions: the same matrix
+      else kept_matrices[s].neighbourhood_D = sys.D;
       return sys.points > own.points;
     };
     const bool enough = own.points >= enough_points;
@@ -785,7 +799,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     auto fit = detail::complete_fit<Degree>(box, fit_sys, false,
                                             [&](auto& sys) { return enough && add_neighbours(sys); }, opt);
     if (!enough && fit.status.stage == FitStage::full) fit.status.stage = FitStage::neighbour;
-    counts[s].add(fit.status);
+    count(fit.status);
     write_fit(c, box, bounds[s], fit);
   });
   for (const auto& c : counts) fallbacks_ += c;

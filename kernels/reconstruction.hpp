@@ -162,9 +162,12 @@ inline bool solve_full_rank(const Eigen::MatrixBase<DerivedD>& D, const Eigen::M
 /// elimination there, applies the same multipliers to each right-hand side in the same order of steps.
 template <int N>
 struct PivotedLdlt {
-  std::uint8_t pivot[N];        ///< the index eliminated at step s
-  double inverse[N];            ///< 1 / its pivot
-  double multiplier[N][N];      ///< [t][s], t > s: the multiplier at step s of the index eliminated at step t
+  std::uint8_t pivot[N];  ///< the index eliminated at step s
+  double inverse[N];      ///< 1 / its pivot
+  /// The multiplier at step s of the index eliminated at step t > s, at at(t, s): the strict lower triangle only,
+  /// for a compact record where the factors are kept.
+  std::array<double, N*(N - 1) / 2> multiplier;
+  static constexpr int at(int t, int s) { return t * (t - 1) / 2 + s; }
 
   /// Factorises D; false when its rank is below N by the relative test of solve_full_rank (factors undefined).
   template <class DerivedD>
@@ -197,7 +200,7 @@ struct PivotedLdlt {
       }
     }
     for (int i = 0; i < N; ++i)
-      for (int s = 0; s < step_of[i]; ++s) multiplier[step_of[i]][s] = L[i][s];
+      for (int s = 0; s < step_of[i]; ++s) multiplier[at(step_of[i], s)] = L[i][s];
     return true;
   }
 
@@ -209,11 +212,11 @@ struct PivotedLdlt {
       for (int k = 0; k < K; ++k) y[s][k] = r(pivot[s], k);
     for (int s = 0; s < N; ++s)  // forward substitution with L
       for (int t = s + 1; t < N; ++t)
-        for (int k = 0; k < K; ++k) y[t][k] -= multiplier[t][s] * y[s][k];
+        for (int k = 0; k < K; ++k) y[t][k] -= multiplier[at(t, s)] * y[s][k];
     for (int s = N - 1; s >= 0; --s)  // D⁻¹, then back substitution with Lᵀ
       for (int k = 0; k < K; ++k) {
         double v = y[s][k] * inverse[s];
-        for (int t = s + 1; t < N; ++t) v -= multiplier[t][s] * y[t][k];
+        for (int t = s + 1; t < N; ++t) v -= multiplier[at(t, s)] * y[t][k];
         y[s][k] = v;
       }
     for (int s = 0; s < N; ++s)
