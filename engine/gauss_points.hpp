@@ -465,6 +465,7 @@ struct TlsCellSums {
 template <int Dim, int Degree>
 struct TlsKeptFit {
   FitStatus rho;
+  bool near_sparse = false;  ///< next to a cell too sparse for its own fit: the neighbourhood fits read its sums
   bool own_fitted = false;
   PivotedLdlt<taylor_size<Dim>(Degree)> own_factors;
 };
@@ -657,13 +658,16 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
   struct Sparse {
     bool value;
   };
+  // A reuse reads what the rebuild before it found (TlsKeptFit::near_sparse): the same particles in the same cells.
   std::vector<Sparse>& sparse = scratch<Sparse>(ncells);
-  for_each_cell(ncells, [&](std::size_t c) {
-    const auto range = cells.block_range(c);
-    const std::size_t n = range.second - range.first;
-    sparse[c].value = n > 0 && n < enough_points;
-  });
+  if constexpr (!Fit.reuse)
+    for_each_cell(ncells, [&](std::size_t c) {
+      const auto range = cells.block_range(c);
+      const std::size_t n = range.second - range.first;
+      sparse[c].value = n > 0 && n < enough_points;
+    });
   auto near_sparse = [&](std::size_t c) {
+    if constexpr (Fit.reuse) return kept[slot(c)].near_sparse;
     bool any = false;
     for_each_cell_near(c, 1, [&](std::size_t n) { any |= sparse[n].value; });
     return any;
@@ -680,6 +684,7 @@ MomentumTotals<Dim> GaussPoints<Dim>::rebuild_tls_of_degree(const ParticleView<D
     if constexpr (Fit.velocity) totals[s] = total;
     needs_neighbours[s] = 0;
     const bool keep = near_sparse(c);
+    if constexpr (!Fit.reuse) kept[s].near_sparse = keep;
     if (keep) keep_sums(s, cs);
     const std::size_t first = first_point(c);
     if (cs.sys.points == 0) {  // an empty cell carries nothing: nothing to conserve there
