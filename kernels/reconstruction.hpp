@@ -127,39 +127,9 @@ struct FallbackCounts {
 
 namespace detail {
 
-/// Solves the symmetric positive semi-definite normal system D x = r (N unknowns, K right-hand sides) if D has
-/// full rank; returns false without touching x otherwise. Rank is decided by a Cholesky factorisation with
-/// diagonal pivoting (LDLᵀ) and a relative pivot test: the pivot of index i counts as zero below `threshold`
-/// times D_ii, its diagonal before elimination. That is the test on the Jacobi-equilibrated matrix S D S
-/// (S = diag(D_ii^{-1/2}), unit diagonal): its Schur complements are those of D scaled by S on both sides, so its
-/// pivots are D's divided by D_ii, and the pivot order — the largest ratio first — is the same. On a
-/// semi-definite matrix the largest entry is on the diagonal and every Schur complement stays semi-definite, so
-/// this is what full pivoting would choose: a rank-revealing factorisation for such matrices. The relative test
-/// makes the decision independent of the scaling of the basis functions and of the sample weights; since
-/// D = Bᵀ W B, a relative threshold τ on D is √τ on the singular values of the sample matrix B (τ = 1e-10:
-/// columns dependent to 1e-5 count as dependent). Never detected afterwards by NaN.
-/// Written out for fixed N ≤ 6 instead of Eigen's FullPivLU, whose solve goes through the dynamic-size
-/// triangular-solve and GEMM kernels (a third of a TLS rebuild's instructions, callgrind, 2D plate). The
-/// factorisation works on D itself, in its own index order: the equilibration as ratios needs no square roots
-/// and the pivoting as a choice of index moves no rows. Scaling D explicitly (3 square roots and 3 divisions for
-/// N = 3), a division in every Schur update and rows swapped in memory and reloaded as vectors (store-forwarding
-/// stalls) had made these solves 14 % of a 2D MUSL-TLS step with 3×3 particles per cell (perf).
-template <int N>
-struct PivotedLdlt;
-
-template <int N, int K, class DerivedD, class DerivedR>
-inline bool solve_full_rank(const Eigen::MatrixBase<DerivedD>& D, const Eigen::MatrixBase<DerivedR>& r,
-                            double threshold, Eigen::Matrix<double, N, K>& x) {
-  PivotedLdlt<N> f;
-  if (!f.factor(D, threshold)) return false;
-  f.solve(r, x);
-  return true;
-}
-
-/// The factors of solve_full_rank's pivoted LDLᵀ, kept to solve for other right-hand sides with the same D (a
-/// momentum-only TLS rebuild refits the velocity on the positions of the rebuild before it). factor() then
-/// solve() is solve_full_rank, operation for operation: the forward substitution, interleaved with the
-/// elimination there, applies the same multipliers to each right-hand side in the same order of steps.
+/// The factors of the pivoted LDLᵀ of solve_full_rank (below), kept to solve for other right-hand sides with the
+/// same D (a momentum-only TLS rebuild refits the velocity on the positions of the rebuild before it).
+/// solve_full_rank is factor() then solve().
 template <int N>
 struct PivotedLdlt {
   std::uint8_t pivot[N];  ///< the index eliminated at step s
@@ -223,6 +193,32 @@ struct PivotedLdlt {
       for (int k = 0; k < K; ++k) x(pivot[s], k) = y[s][k];
   }
 };
+
+/// Solves the symmetric positive semi-definite normal system D x = r (N unknowns, K right-hand sides) if D has
+/// full rank; returns false without touching x otherwise. Rank is decided by a Cholesky factorisation with
+/// diagonal pivoting (LDLᵀ) and a relative pivot test: the pivot of index i counts as zero below `threshold`
+/// times D_ii, its diagonal before elimination. That is the test on the Jacobi-equilibrated matrix S D S
+/// (S = diag(D_ii^{-1/2}), unit diagonal): its Schur complements are those of D scaled by S on both sides, so its
+/// pivots are D's divided by D_ii, and the pivot order — the largest ratio first — is the same. On a
+/// semi-definite matrix the largest entry is on the diagonal and every Schur complement stays semi-definite, so
+/// this is what full pivoting would choose: a rank-revealing factorisation for such matrices. The relative test
+/// makes the decision independent of the scaling of the basis functions and of the sample weights; since
+/// D = Bᵀ W B, a relative threshold τ on D is √τ on the singular values of the sample matrix B (τ = 1e-10:
+/// columns dependent to 1e-5 count as dependent). Never detected afterwards by NaN.
+/// Written out for fixed N ≤ 6 instead of Eigen's FullPivLU, whose solve goes through the dynamic-size
+/// triangular-solve and GEMM kernels (a third of a TLS rebuild's instructions, callgrind, 2D plate). The
+/// factorisation works on D itself, in its own index order: the equilibration as ratios needs no square roots
+/// and the pivoting as a choice of index moves no rows. Scaling D explicitly (3 square roots and 3 divisions for
+/// N = 3), a division in every Schur update and rows swapped in memory and reloaded as vectors (store-forwarding
+/// stalls) had made these solves 14 % of a 2D MUSL-TLS step with 3×3 particles per cell (perf).
+template <int N, int K, class DerivedD, class DerivedR>
+inline bool solve_full_rank(const Eigen::MatrixBase<DerivedD>& D, const Eigen::MatrixBase<DerivedR>& r,
+                            double threshold, Eigen::Matrix<double, N, K>& x) {
+  PivotedLdlt<N> f;
+  if (!f.factor(D, threshold)) return false;
+  f.solve(r, x);
+  return true;
+}
 
 }  // namespace detail
 
