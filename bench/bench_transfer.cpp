@@ -19,14 +19,21 @@
 // G2P (gather_g2p) for the gathers the schemes use, MUSL's fused velocity-update + momentum-scatter pass
 // (advance_velocity_scatter_momentum, coloured), the stress update alone (neo-Hookean σ(F)), and the per-step
 // binning (CellBins::bin) and the every-16-steps permutation (ParticleStore::permute).
+//
+// The gather's schedule (schedule/g2p_usl/<partitioner>/grain:G): the USL gather under each oneTBB partitioner —
+// auto (the engine's, engine/parallel_over.hpp), static, simple, affinity — and grain sizes from 256 to 16384
+// particles per task, so the engine's choice is a measurement (docs/PERFORMANCE.md, "The gather's schedule").
 #include <atomic>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include <benchmark/benchmark.h>
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
+#include <tbb/partitioner.h>
 
 #include "bench/bench_util.hpp"
 #include "engine/gauss_points.hpp"
@@ -264,6 +271,27 @@ void gather(ParticleSet2D& ps, Grid2D& g, double dt, const mpm::NeoHookean& law,
   });
 }
 
+enum class Partitioner { auto_, static_, simple, affinity };
+
+/// The USL gather as one parallel_for over particle ranges of `grain` under the given partitioner.
+void gather_usl_scheduled(ParticleSet2D& ps, Grid2D& g, double dt, const mpm::NeoHookean& law,
+                          mpm::ParticleGuard& guard, Partitioner part, std::size_t grain,
+                          tbb::affinity_partitioner& affinity) {
+  const auto pv = ps.store.view();
+  const auto gv = g.view();
+  const auto stress = [&](const double* F, double* s) { law.stress<2>(F, s); };
+  const tbb::blocked_range<std::size_t> range(0, ps.n, grain);
+  const auto body = [&](const tbb::blocked_range<std::size_t>& r) {
+    mpm::gather_g2p<mpm::GatherFields{true, true, true}, 2, 3>(ps.basis, pv, gv, r.begin(), r.end(), dt, stress, guard);
+  };
+  switch (part) {
+    case Partitioner::auto_: tbb::parallel_for(range, body, tbb::auto_partitioner{}); break;
+    case Partitioner::static_: tbb::parallel_for(range, body, tbb::static_partitioner{}); break;
+    case Partitioner::simple: tbb::parallel_for(range, body, tbb::simple_partitioner{}); break;
+    case Partitioner::affinity: tbb::parallel_for(range, body, affinity); break;
+  }
+}
+
 mpm::NeoHookean neo_hookean() {
   mpm::MaterialSpec spec;
   spec.model = mpm::MaterialModel::neo_hookean;
@@ -272,10 +300,8 @@ mpm::NeoHookean neo_hookean() {
   return mpm::NeoHookean{mpm::Lame::from(spec)};
 }
 
-void BM_G2P(benchmark::State& state, G2P variant) {
-  const std::int64_t nominal = state.range(0);
-  auto& ps = particle_set(nominal);
-  auto gc = mpm_bench::limit_threads(static_cast<int>(state.range(1)));
+/// A grid of random velocities and accelerations for the gathers.
+Grid2D random_grid(const ParticleSet2D& ps) {
   Grid2D g(ps.functions());
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-0.1, 0.1);
@@ -284,10 +310,20 @@ void BM_G2P(benchmark::State& state, G2P variant) {
       g.v[d][i] = u(rng);
       g.a[d][i] = u(rng);
     }
+  return g;
+}
+
+constexpr double kGatherDt = 1e-9;  // particles and F barely change over a gather benchmark
+
+void BM_G2P(benchmark::State& state, G2P variant) {
+  const std::int64_t nominal = state.range(0);
+  auto& ps = particle_set(nominal);
+  auto gc = mpm_bench::limit_threads(static_cast<int>(state.range(1)));
+  Grid2D g = random_grid(ps);
   const auto law = neo_hookean();
   mpm::ParticleGuard guard;
   guard.hi = {1.0, 1.0, 0.0};
-  const double dt = 1e-9;  // particles and F barely change over the benchmark
+  const double dt = kGatherDt;
   auto run = [&] {
     switch (variant) {
       case G2P::usl: gather<mpm::GatherFields{true, true, true}>(ps, g, dt, law, guard); break;
@@ -308,6 +344,19 @@ void BM_G2P(benchmark::State& state, G2P variant) {
     }
   };
   time_per_particle(state, run, ps.n);
+  if (guard.first_bad.load() != mpm::ParticleGuard::none) state.SkipWithError("a particle was flagged invalid");
+}
+
+void BM_GatherSchedule(benchmark::State& state, Partitioner part) {
+  auto& ps = particle_set(state.range(0));
+  auto gc = mpm_bench::limit_threads(static_cast<int>(state.range(1)));
+  const auto grain = static_cast<std::size_t>(state.range(2));
+  Grid2D g = random_grid(ps);
+  const auto law = neo_hookean();
+  mpm::ParticleGuard guard;
+  guard.hi = {1.0, 1.0, 0.0};
+  tbb::affinity_partitioner affinity;  // kept across iterations: it replays the last split
+  time_per_particle(state, [&] { gather_usl_scheduled(ps, g, kGatherDt, law, guard, part, grain, affinity); }, ps.n);
   if (guard.first_bad.load() != mpm::ParticleGuard::none) state.SkipWithError("a particle was flagged invalid");
 }
 
@@ -382,6 +431,16 @@ const bool registered = [] {
   args(RegisterBenchmark("stress/neo_hookean", BM_Stress), n, {1, 2});
   args(RegisterBenchmark("bin", BM_Bin), n, {1, 2});
   args(RegisterBenchmark("permute", BM_Permute), n, {1, 2});
+  const std::pair<const char*, Partitioner> partitioners[] = {{"auto", Partitioner::auto_},
+                                                              {"static", Partitioner::static_},
+                                                              {"simple", Partitioner::simple},
+                                                              {"affinity", Partitioner::affinity}};
+  for (const std::int64_t np : {100'000, 1'000'000})
+    for (const auto& [label, part] : partitioners) {
+      auto* b = RegisterBenchmark((std::string("schedule/g2p_usl/") + label).c_str(), BM_GatherSchedule, part);
+      for (const std::int64_t grain : {256, 2048, 16384}) b->Args({np, 2, grain});
+      b->ArgNames({"n", "threads", "grain"})->UseRealTime()->Unit(benchmark::kMillisecond);
+    }
   return true;
 }();
 

@@ -278,6 +278,49 @@ def section_other_kernels(lines, res):
     lines.append("")
 
 
+def section_schedule(lines, res):
+    """The USL gather under each oneTBB partitioner and grain size (schedule/g2p_usl/...), 2 threads."""
+    cells = {}
+    for name, e in res.items():
+        base, kv = args_of(name)
+        parts = base.split("/")
+        if parts[0] != "schedule":
+            continue
+        cells[(kv["n"], parts[2], kv["grain"])] = e
+    if not cells:
+        return
+    sizes = sorted({k[0] for k in cells})
+    grains = sorted({k[2] for k in cells})
+    order = ["auto", "static", "simple", "affinity"]
+    parts = [p for p in order if any(k[1] == p for k in cells)]
+    lines.append("## Gather schedule: oneTBB partitioner and grain (USL gather, 2D quadratic, 2 threads)")
+    lines.append("")
+    lines.append("Mparticles/s of `gather_g2p` (velocity, position, deformation and stress) as one `tbb::parallel_for` "
+                 "over particle ranges of *grain* particles; the engine runs auto with grain 2048 "
+                 "(`engine/parallel_over.hpp`).")
+    lines.append("")
+    head = "| particles | partitioner | " + " | ".join(f"grain {g}" for g in grains) + " |"
+    lines.append(head)
+    lines.append("|---:|---|" + "---:|" * len(grains))
+    for n in sizes:
+        for p in parts:
+            row = []
+            for g in grains:
+                e = cells.get((n, p, g))
+                row.append(f"{e['items_per_second'] / 1e6:.1f}" if e else "–")
+            lines.append(f"| {n:,} | {p} | " + " | ".join(row) + " |")
+    lines.append("")
+    for n in sizes:
+        engine = cells.get((n, "auto", 2048))
+        (_, bp, bg), best = min(((k, e) for k, e in cells.items() if k[0] == n), key=lambda ke: ke[1]["seconds"])
+        slowest = max(e["seconds"] for k, e in cells.items() if k[0] == n)
+        if engine:
+            lines.append(f"- {n:,} particles: fastest {bp} with grain {bg}; the engine's schedule takes "
+                         f"{engine['seconds'] / best['seconds']:.3f}× its time, the slowest schedule "
+                         f"{slowest / best['seconds']:.3f}×.")
+    lines.append("")
+
+
 def step_rows(res):
     rows = {}
     for name, e in res.items():
@@ -410,6 +453,7 @@ def main():
     section_weights(lines, res)
     section_p2g(lines, res)
     section_other_kernels(lines, res)
+    section_schedule(lines, res)
     section_stream(lines, res)
     os.makedirs(os.path.dirname(os.path.abspath(a.table)), exist_ok=True)
     with open(a.table, "w") as f:
