@@ -2,6 +2,8 @@
 # Builds the benchmark programs (Release) if needed, runs them, and writes the summary table and plot:
 #   docs/bench_table.md   machine, compiler, date; medians, particle-steps/s and the key ratios
 #   docs/throughput.png   particle-steps/s against particle count, one line per (dim, scheme, threads)
+#   README.md             the headline tables between its bench:begin / bench:end markers (only when --docs is
+#                         the repository's docs/)
 #
 # Usage: tools/run_bench.sh [--build-dir DIR] [--results DIR] [--only NAME[,NAME...]] [--filter REGEX]
 #                           [--no-build] [--no-plot] [--docs DIR] [--wait-idle SECONDS] [--nice N]
@@ -138,6 +140,9 @@ done
 
 if [[ $plot -eq 1 ]]; then
   mkdir -p "$docs"
+  # the README's headline tables only from a run that writes the repository's own docs
+  readme=()
+  [[ "$(realpath -m "$docs")" == "$root/docs" ]] && readme=(--readme "$root/README.md")
   /usr/bin/python3 "$root/tools/plot_bench.py" --results "$results" --build-dir "$build" \
-    --table "$docs/bench_table.md" --png "$docs/throughput.png"
+    --table "$docs/bench_table.md" --png "$docs/throughput.png" "${readme[@]}"
 fi
