@@ -13,7 +13,7 @@
 //
 // The reconstruction stage against direct P2G, per particle (p2g/tls): the same particles' mass, momentum and force
 // through the TLS path — single-cell binning, GaussPoints::rebuild of ρ, v and σ at 2×2 Gauss points per cell,
-// coloured scatter of the Gauss points (scatter_gauss) — as Simulation::step_with runs it for USL. With 2×2
+// coloured scatter of the Gauss points (GaussPoints::scatter) — as Simulation::step_with runs it for USL. With 2×2
 // particles per cell every velocity and stress fit is completed from the cell's 3×3 neighbourhood.
 //
 // G2P (gather_g2p) for the gathers the schemes use, MUSL's fused velocity-update + momentum-scatter pass
@@ -247,11 +247,7 @@ void BM_P2G_TLS(benchmark::State& state) {
     cells.bin(x, ps.n);
     benchmark::DoNotOptimize(gauss.rebuild(pv, cells, ps.bins, mpm::NoBodyForce{}, true, true));
     clear_parallel(g);
-    const auto gp = gauss.view();
-    const unsigned* gorder = gauss.bins().order().data();
-    gauss.bins().for_each_block_coloured([&](std::size_t b, std::size_t e) {
-      mpm::scatter_gauss<kAll, false, 2, 3>(ps.basis, gp, gv, gorder, b, e);
-    });
+    gauss.scatter<kAll, false, 3>(ps.basis, gv);
   };
   time_per_particle(state, run, ps.n);
   state.counters["fallbacks_per_rebuild"] =

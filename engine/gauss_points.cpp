@@ -56,7 +56,10 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene, int block_width)
   } else {
     // tensor-product Gauss–Legendre rule of the unit cell (paper eqs 22–25, thesis eq. 3.3)
     std::array<GaussRule, Dim> rules;
-    for (int d = 0; d < Dim; ++d) rules[d] = gauss_legendre(scene.algorithm.gauss_per_cell[d]);
+    for (int d = 0; d < Dim; ++d) {
+      rules[d] = gauss_legendre(scene.algorithm.gauss_per_cell[d]);
+      axis_points_[d] = rules[d].x;
+    }
     cell_rule_ = rules[0];
     const int n0 = rules[0].x.size(), n1 = Dim > 1 ? rules[Dim - 1].x.size() : 1;
     for (int j = 0; j < n1; ++j)
@@ -95,6 +98,10 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene, int block_width)
   std::array<const double*, Dim> x;
   for (int d = 0; d < Dim; ++d) x[d] = x_[d].data();
   bins_.bin(x, n);  // Gauss points never move: binned once (in storage order, as they are placed)
+  // GaussPoints::scatter reads a block's range of the order as whole cells in storage order
+  const auto order = bins_.order();
+  for (std::size_t k = 0; k < n; ++k)
+    if (order[k] != k) throw std::logic_error("GaussPoints: the Gauss points are not stored in their block order");
 }
 
 template <int Dim>

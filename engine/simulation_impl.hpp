@@ -560,11 +560,7 @@ double Simulation<Dim>::step_with(const B& basis, const M& material, const F& bo
       const MomentumTotals<Dim> totals = only_velocities_changed
                                              ? gauss_->rebuild_momentum(pv, *particle_cells_, bins_, body)
                                              : gauss_->rebuild(pv, *particle_cells_, bins_, body, Fields.force, Fields.momentum);
-      const auto gp = gauss_->view();
-      const unsigned* gorder = gauss_->bins().order().data();
-      gauss_->bins().for_each_block_coloured([&](std::size_t b, std::size_t e) {
-        scatter_gauss<Fields, F::active, Dim, S>(basis, gp, gv, gorder, b, e);
-      });
+      gauss_->template scatter<Fields, F::active, S>(basis, gv);
       if constexpr (Fields.momentum) check_momentum(totals);
     } else {
       bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {

@@ -169,8 +169,10 @@ struct UniformAxis {
     // floor(s) without the libm call (s ≤ 0, and NaN, give cell 0)
     const double s = x * inv_h;
     const int c = s > 0.0 ? std::min(static_cast<int>(std::min(s, double(cells))), cells - 1) : 0;
-    return {c, s - c, S == 3 ? (c == 0) + 2 * (c == cells - 1) : 0};
+    return {c, s - c, span_class(c)};
   }
+  /// Which row of `coefficients` cell c uses: the open knot vector's end cells differ from the interior ones.
+  [[gnu::always_inline]] int span_class(int c) const { return S == 3 ? (c == 0) + 2 * (c == cells - 1) : 0; }
 
   [[gnu::always_inline]] AxisWeights<S> operator()(double x) const {
     const Location at = locate(x);

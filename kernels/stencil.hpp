@@ -93,14 +93,20 @@ inline constexpr auto padded_uniform = padded_uniform_coefficients<S>();
 
 /// The fast path evaluates its S polynomials as vectors, a + ξ (b + ξ c) and (b + 2ξ c)/h, in the lanes of a row
 /// (the same arithmetic per function as UniformAxis::operator()); the generic path fills the lanes from its values.
+/// The row of a point at local coordinate ξ in cell `cell` of span class `span_class` (UniformAxis::locate).
+template <int S>
+MPM_INLINE AxisRow<S> uniform_row(const UniformAxis<S>& axis, int cell, int span_class, double xi) {
+  const auto& q = detail::padded_uniform<S>[span_class];
+  const RowVector<S> a = load_row<RowVector<S>>(q[0].data()), b = load_row<RowVector<S>>(q[1].data()),
+                     c = load_row<RowVector<S>>(q[2].data());
+  return {cell, a + xi * (b + xi * c), (b + (2.0 * xi) * c) * axis.inv_h};
+}
+
 template <int S, class Axis>
 MPM_INLINE AxisRow<S> axis_row(const Axis& axis, double x) {
   if constexpr (std::is_same_v<Axis, UniformAxis<S>>) {
     const auto at = axis.locate(x);
-    const auto& q = detail::padded_uniform<S>[at.span_class];
-    const RowVector<S> a = load_row<RowVector<S>>(q[0].data()), b = load_row<RowVector<S>>(q[1].data()),
-                       c = load_row<RowVector<S>>(q[2].data());
-    return {at.cell, a + at.xi * (b + at.xi * c), (b + (2.0 * at.xi) * c) * axis.inv_h};
+    return uniform_row<S>(axis, at.cell, at.span_class, at.xi);
   } else {
     const AxisWeights<S> a = axis(x);
     return {a.first, RowVector<S>([&](int i) { return i < S ? a.w[i] : 0.0; }),

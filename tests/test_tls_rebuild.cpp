@@ -15,6 +15,7 @@
 
 #include "engine/cell_bins.hpp"
 #include "engine/gauss_points.hpp"
+#include "engine/problem.hpp"
 #include "engine/scene.hpp"
 
 using namespace mpm;
@@ -140,14 +141,19 @@ TEST_CASE("single cells in the layout's block order hold the same particles in t
 namespace {
 
 /// A 2D MUSL-TLS scene on [0, 1]² with `cells` and Taylor degree `degree`.
-Scene tls_scene(std::array<int, 2> cells, int degree) {
+Scene tls_scene(std::array<int, 2> cells, int degree, const char* basis = "bspline2",
+                std::array<int, 2> gauss_per_cell = {2, 2}) {
   const nlohmann::json j = {
       {"dimension", 2},
-      {"grid", {{"length", {1.0, 1.0}}, {"cells", {cells[0], cells[1]}}, {"basis", "bspline2"}}},
+      {"grid", {{"length", {1.0, 1.0}}, {"cells", {cells[0], cells[1]}}, {"basis", basis}}},
       {"particles", {{"per_cell", {3, 3}}}},
       {"bodies", {{{"box", {{0.0, 0.0}, {1.0, 1.0}}}}}},
       {"material", {{"model", "neo-hookean"}, {"E", 1e6}, {"nu", 0.3}, {"density", 1000.0}}},
-      {"algorithm", {{"update", "musl"}, {"mapping", "tls"}, {"tls_degree", degree}}},
+      {"algorithm",
+       {{"update", "musl"},
+        {"mapping", "tls"},
+        {"tls_degree", degree},
+        {"gauss_per_cell", {gauss_per_cell[0], gauss_per_cell[1]}}}},
       {"time", {{"dt", 1e-5}, {"end", 1e-4}}}};
   return parse_scene(j);
 }
@@ -371,4 +377,65 @@ TEST_CASE("TLS limiter: alpha from the extreme deviations equals the minimum ove
     }
   }
   CHECK(limited > 1000);  // the cases limit often enough to test the bound, not just the identity
+}
+
+namespace {
+
+/// The grid sums a scatter writes, sized for a basis of S functions per cell and axis on `cells`.
+struct ScatterTargets {
+  int stride;
+  std::vector<double> m, q0, q1, f0, f1;
+  ScatterTargets(std::array<int, 2> cells, int S)
+      : stride(grid_stride(cells[0] + S - 1, S)),
+        m(static_cast<std::size_t>(stride) * (cells[1] + S), 0.0),
+        q0(m),
+        q1(m),
+        f0(m),
+        f1(m) {}
+  GridView<2> view() {
+    GridView<2> g;
+    g.stride1 = stride;
+    g.dofs = static_cast<int>(m.size());
+    g.m = m.data();
+    g.q = {q0.data(), q1.data()};
+    g.f = {f0.data(), f1.data()};
+    return g;
+  }
+  std::array<const std::vector<double>*, 5> arrays() const { return {&m, &q0, &q1, &f0, &f1}; }
+};
+
+/// GaussPoints::scatter (whole cells, tabulated weights) against scatter_gauss (a stencil per point) after a TLS
+/// rebuild of every field, with a body force: every grid sum equal to round-off.
+template <int S>
+void check_cell_scatter(std::array<int, 2> cells, const char* basis_name, std::array<int, 2> gauss_per_cell) {
+  BinnedParticles binned(cells, RandomParticles(cells, 11));
+  GaussPoints<2> gauss(tls_scene(cells, 1, basis_name, gauss_per_cell), binned.layout.block_width());
+  const UniformBodyForce<2> body{{0.3, -9.81}};
+  gauss.rebuild(binned.particles.view(), binned.by_cell, binned.layout, body, true, true);
+  const TensorBasis<2, UniformAxis<S>> basis{{UniformAxis<S>(cells[0], 1.0), UniformAxis<S>(cells[1], 1.0)},
+                                            {cells[0] + S - 1, cells[1] + S - 1}};
+  constexpr ScatterFields all{true, true, true};
+  ScatterTargets cell_wise(cells, S), point_wise(cells, S);
+  gauss.scatter<all, true, S>(basis, cell_wise.view());
+  const unsigned* order = gauss.bins().order().data();
+  gauss.bins().for_each_block_serial([&](std::size_t b, std::size_t e) {
+    scatter_gauss<all, true, 2, S>(basis, gauss.view(), point_wise.view(), order, b, e);
+  });
+  for (int k = 0; k < 5; ++k) {
+    Difference diff;
+    diff.add(cell_wise.arrays()[k]->data(), point_wise.arrays()[k]->data(), point_wise.m.size());
+    INFO(basis_name << ", " << cells[0] << "x" << cells[1] << " cells, " << gauss_per_cell[0] << "x"
+                    << gauss_per_cell[1] << " Gauss points, grid array " << k);
+    CHECK(diff.scale > 0.0);
+    CHECK(diff.diff <= 1e-13 * diff.scale);
+  }
+}
+
+}  // namespace
+
+TEST_CASE("Gauss-point scatter of whole cells from tabulated weights equals a stencil per point", "[tls][scatter]") {
+  check_cell_scatter<3>({7, 5}, "bspline2", {2, 2});  // interior and both end span classes
+  check_cell_scatter<3>({7, 5}, "bspline2", {3, 2});  // another rule: the run-time point counts
+  check_cell_scatter<3>({1, 4}, "bspline2", {2, 3});  // one cell along axis 0: first and last at once
+  check_cell_scatter<2>({6, 4}, "linear", {2, 2});
 }
