@@ -163,9 +163,8 @@ void scatter_gauss_cells(const GaussRowTable<S>& t, const UniformAxis<S>& axis0,
         for (int d = 0; d < 2; ++d) {
           if constexpr (Fields.momentum) q_y[d][gj] += wx * gp.q[d][ig];
           if constexpr (Fields.force) {
-            double mb = 0.0;
-            if constexpr (Body) mb = gp.fb[d][ig];
-            f_wy[d][gj] += wx * mb - t.dwx[cx][gi] * gp.s[sym_index<2>(0, d)][ig];
+            if constexpr (Body) f_wy[d][gj] += wx * gp.fb[d][ig];
+            f_wy[d][gj] -= t.dwx[cx][gi] * gp.s[sym_index<2>(0, d)][ig];
             f_dwy[d][gj] += wx * gp.s[sym_index<2>(1, d)][ig];
           }
         }
