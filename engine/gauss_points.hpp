@@ -111,7 +111,8 @@ inline void scatter_gauss(const TensorBasis<Dim, Axis>& basis, GaussView<Dim> gp
 /// evaluated once per scatter instead of once per point. Axis 0 as SIMD rows, axis 1 as scalars (one per row).
 template <int S>
 struct GaussRowTable {
-  static constexpr int classes = 4;  ///< interior, first cell, last cell, first and last (one cell)
+  /// quadratic: interior, first cell, last cell, first and last (one cell); linear: one (UniformAxis::span_class)
+  static constexpr int classes = static_cast<int>(UniformAxis<S>::coefficients.size());
   static constexpr int max_points = 10;  ///< per axis (the scene caps gauss_per_cell at 10)
   std::array<int, 2> n{};            ///< points per axis
   std::array<std::array<RowVector<S>, max_points>, classes> wx, dwx;
