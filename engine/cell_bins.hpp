@@ -81,11 +81,17 @@ class CellBins {
   /// one after another: the order in which the particle columns lie after a reordering by these bins, so per-cell
   /// work that reads the particles of each cell (the TLS sums) streams through them instead of jumping between
   /// the colour classes, as a row-major sweep of the cells does. Not coloured: f may write only its cell's data.
+  /// f(rank, cell) is also told its block's rank: the cells of a block are visited in order by one task, so f may
+  /// accumulate into data of the block's rank, in an order that does not depend on the thread count.
   template <class F>
   void for_each_cell_by_block(F&& f) const {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, block_of_rank_.size(), 4),
                       [&](const tbb::blocked_range<std::size_t>& r) {
-                        for (std::size_t k = r.begin(); k < r.end(); ++k) for_each_cell_of_block(block_of_rank_[k], f);
+                        for (std::size_t k = r.begin(); k < r.end(); ++k)
+                          if constexpr (std::is_invocable_v<F, std::size_t, std::size_t>)
+                            for_each_cell_of_block(block_of_rank_[k], [&](std::size_t c) { f(k, c); });
+                          else
+                            for_each_cell_of_block(block_of_rank_[k], f);
                       });
   }
 

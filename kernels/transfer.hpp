@@ -73,6 +73,10 @@ struct MomentumTotals {
     }
     m_abs_v += m * std::sqrt(v2);
   }
+  void add(const MomentumTotals& o) {
+    for (int d = 0; d < Dim; ++d) mv[d] += o.mv[d];
+    m_abs_v += o.m_abs_v;
+  }
 };
 
 /// Sum of per-block (or per-cell) totals in index order, compensated: deterministic and free of O(n ε) drift.
