@@ -235,27 +235,14 @@ struct TaylorNormalSystem {
         have_shift = true;
       }
       const Eigen::Matrix<double, K, 1> g = f - s;
-      if constexpr (Degree <= 1) {
-        // ψ = [1, ξ]: the terms from ξ itself. Through the array of taylor_basis_values, the native build stored
-        // ψ by scalars and reloaded it in pairs for the D updates, and the failed store forwarding was a third of
-        // the loop.
-        bt.col(0) += w * g;
-        if constexpr (Degree == 1)
-          for (int i = 0; i < Dim; ++i) {
-            bt.col(1 + i) += (w * xi[i]) * g;
-            if constexpr (Matrix) {
-              lower(1 + i, 0) += w * xi[i];
-              for (int j = 0; j <= i; ++j) lower(1 + i, 1 + j) += (w * xi[i]) * xi[j];
-            }
-          }
-        if constexpr (Matrix) lower(0, 0) += w;
-      } else {
-        const auto psi = taylor_basis_values<Dim, Degree>(xi);
-        for (int k = 0; k < N; ++k) bt.col(k) += (w * psi[k]) * g;
-        if constexpr (Matrix)
-          for (int i = 0; i < N; ++i)
-            for (int j = 0; j <= i; ++j) lower(i, j) += (w * psi[i]) * psi[j];
-      }
+      // ψ_k, at degree ≤ 1 read from ξ itself (ψ = [1, ξ]): through the array alone, the native build stored ψ by
+      // scalars and reloaded it in pairs for the D updates, and the failed store forwarding was a third of the loop
+      const auto basis = taylor_basis_values<Dim, Degree>(xi);
+      auto psi = [&](int k) { return Degree <= 1 && k > 0 ? xi[k - 1] : basis[k]; };
+      for (int k = 0; k < N; ++k) bt.col(k) += (w * psi(k)) * g;
+      if constexpr (Matrix)
+        for (int i = 0; i < N; ++i)
+          for (int j = 0; j <= i; ++j) lower(i, j) += (w * psi(i)) * psi(j);
     });
     if constexpr (Matrix) {
       for (int i = 0; i < N; ++i)
