@@ -18,9 +18,9 @@ namespace {
 constexpr std::size_t min_chunk = 1 << 14;
 
 std::size_t chunks_for(std::size_t count) {
-  const auto threads = static_cast<std::size_t>(
+  const std::size_t threads =
       std::min<std::size_t>(tbb::this_task_arena::max_concurrency(),
-                            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism)));
+                            tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   return std::clamp<std::size_t>(count / min_chunk, 1, std::max<std::size_t>(1, threads));
 }
 }  // namespace
