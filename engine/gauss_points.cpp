@@ -24,7 +24,7 @@ std::array<double, Dim> first_n(const std::array<double, 3>& a) {
 
 template <int Dim>
 GaussPoints<Dim>::GaussPoints(const Scene& scene)
-    : GaussPoints(scene, CellBins<Dim>::block_width_for(stencil_reach(degree_of(scene.grid.basis) + 1), 0)) {}
+    : GaussPoints(scene, CellBins<Dim>::block_width_for(stencil_reach(stencil_width_of(scene.grid.basis)), 0)) {}
 
 template <int Dim>
 GaussPoints<Dim>::GaussPoints(const Scene& scene, int block_width)
@@ -33,7 +33,7 @@ GaussPoints<Dim>::GaussPoints(const Scene& scene, int block_width)
       mls_support_(scene.algorithm.mls_support),
       cells_(first_n<Dim>(scene.grid.cells)),
       bins_(cells_, first_n<Dim>(scene.grid.length), block_width) {
-  const int narrowest = CellBins<Dim>::block_width_for(stencil_reach(degree_of(scene.grid.basis) + 1), 0);
+  const int narrowest = CellBins<Dim>::block_width_for(stencil_reach(stencil_width_of(scene.grid.basis)), 0);
   if (block_width < narrowest)
     throw std::logic_error("GaussPoints: blocks of " + std::to_string(block_width) + " cells, at least " +
                            std::to_string(narrowest) + " needed for the scene's basis");

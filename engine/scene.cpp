@@ -279,8 +279,8 @@ std::array<int, 3> integers(const Node& n, const std::string& key, int dim, std:
 // ---------------------------------------------------------------------------------------------------------
 // Names
 
-constexpr std::array<std::pair<const char*, Basis>, 3> kBasis{
-    {{"linear", Basis::linear}, {"bspline2", Basis::bspline2}, {"bspline3", Basis::bspline3}}};
+constexpr std::array<std::pair<const char*, Basis>, 4> kBasis{
+    {{"linear", Basis::linear}, {"bspline2", Basis::bspline2}, {"bspline3", Basis::bspline3}, {"ddmpm", Basis::ddmpm}}};
 constexpr std::array<std::pair<const char*, BasisPath>, 2> kPath{{{"fast", BasisPath::fast}, {"generic", BasisPath::generic}}};
 constexpr std::array<std::pair<const char*, Layout>, 3> kLayout{
     {{"uniform", Layout::uniform}, {"gauss", Layout::gauss}, {"random", Layout::random}}};
@@ -451,6 +451,8 @@ void read_grid(const Node& top, Scene& s, const ProblemInfo* info) {
   s.grid.path = choice(grid, "basis_path", s.grid.basis == Basis::bspline3 ? BasisPath::generic : BasisPath::fast, kPath);
   if (s.grid.basis == Basis::bspline3 && s.grid.path == BasisPath::fast)
     fail("grid.basis_path", *grid.find("basis_path"), "there is no fast path for bspline3; use \"generic\"");
+  if (s.grid.basis == Basis::ddmpm && s.grid.path == BasisPath::generic)
+    fail("grid.basis_path", *grid.find("basis_path"), "grid.basis = \"ddmpm\" has one closed-form path; use \"fast\"");
 
   // Problems whose body does not fill the grid need a grid that holds it.
   if (info && info->id == ProblemName::column_compaction && s.problem.height > s.grid.length[0])

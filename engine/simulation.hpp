@@ -18,6 +18,7 @@
 #include "engine/particle_store.hpp"
 #include "engine/problem.hpp"
 #include "engine/scene.hpp"
+#include "kernels/dual_domain.hpp"
 #include "kernels/stencil.hpp"
 #include "kernels/transfer.hpp"
 
@@ -61,7 +62,7 @@ struct CriticalStep {
 template <int Dim>
 using AnyBasis = std::variant<TensorBasis<Dim, UniformAxis<2>>, TensorBasis<Dim, UniformAxis<3>>,
                               TensorBasis<Dim, CoxDeBoorAxis<2>>, TensorBasis<Dim, CoxDeBoorAxis<3>>,
-                              TensorBasis<Dim, CoxDeBoorAxis<4>>>;
+                              TensorBasis<Dim, CoxDeBoorAxis<4>>, TensorBasis<Dim, DualDomainAxis>>;
 
 template <int Dim>
 AnyBasis<Dim> make_basis(const GridSpec& grid);

@@ -209,11 +209,12 @@ AnyBasis<Dim> make_basis(const GridSpec& grid) {
   auto build = [&](auto axis_of) {
     using Axis = decltype(axis_of(0));
     std::array<int, Dim> functions;
-    for (int d = 0; d < Dim; ++d) functions[d] = grid.cells[d] + p;
+    for (int d = 0; d < Dim; ++d) functions[d] = functions_per_axis(grid.basis, grid.cells[d]);
     if constexpr (Dim == 1) return AnyBasis<Dim>(TensorBasis<Dim, Axis>{{axis_of(0)}, functions});
     else return AnyBasis<Dim>(TensorBasis<Dim, Axis>{{axis_of(0), axis_of(1)}, functions});
   };
   auto knots = [&](int d) { return KnotVector::open_uniform(p, grid.cells[d], grid.length[d]); };
+  if (grid.basis == Basis::ddmpm) return build([&](int d) { return DualDomainAxis(grid.cells[d], grid.length[d]); });
   if (grid.path == BasisPath::fast && p <= 2) {
     if (p == 1) return build([&](int d) { return UniformAxis<2>(grid.cells[d], grid.length[d]); });
     return build([&](int d) { return UniformAxis<3>(grid.cells[d], grid.length[d]); });
@@ -237,7 +238,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
           c[d] = scene.grid.cells[d];
           l[d] = scene.grid.length[d];
         }
-        const int reach = stencil_reach(degree_of(scene.grid.basis) + 1);
+        const int reach = stencil_reach(stencil_width_of(scene.grid.basis));
         return CellBins<Dim>(c, l, CellBins<Dim>::block_width_for(reach, bin_slack_cells));
       }()) {
   if (scene.dimension != Dim) throw std::logic_error("Simulation: scene dimension does not match");
@@ -288,9 +289,9 @@ Simulation<Dim>::Simulation(const Scene& scene)
   empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
 
   // DOF = i0 + stride1 · i1, with ghost columns for the kernels' padding lanes (stencil.hpp); they stay empty
-  const int degree = degree_of(scene.grid.basis);
-  grid_.stride1 = grid_stride(scene.grid.cells[0] + degree, degree + 1);
-  grid_.dofs = Dim == 1 ? grid_.stride1 : grid_.stride1 * (scene.grid.cells[Dim - 1] + degree);
+  const Basis basis = scene.grid.basis;
+  grid_.stride1 = grid_stride(functions_per_axis(basis, scene.grid.cells[0]), stencil_width_of(basis));
+  grid_.dofs = Dim == 1 ? grid_.stride1 : grid_.stride1 * functions_per_axis(basis, scene.grid.cells[Dim - 1]);
   grid_.m.assign(grid_.dofs, 0.0);
   for (int d = 0; d < Dim; ++d) {
     for (auto* a : {&grid_.q[d], &grid_.f[d], &grid_.v[d], &grid_.a[d]}) a->assign(grid_.dofs, 0.0);
@@ -300,8 +301,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
   for (int side : scene.fixed_sides) {
     const int axis = side / 2;
     if (axis >= Dim) continue;
-    const int nf = scene.grid.cells[axis] + degree_of(scene.grid.basis);
-    const int index = side % 2 ? nf - 1 : 0;
+    const int index = boundary_function(basis, scene.grid.cells[axis], side % 2);
     for (int dof = 0; dof < grid_.dofs; ++dof) {
       const int along = axis == 0 ? dof % grid_.stride1 : dof / grid_.stride1;
       if (along == index) grid_.fixed[axis][dof] = 1;

@@ -3,6 +3,9 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <vector>
+
+#include <tbb/global_control.h>
 
 #include <nlohmann/json.hpp>
 
@@ -37,6 +40,20 @@ inline nlohmann::json plate_scene(int cells, double amplitude = 0.05, const std:
 template <int Dim>
 void run_to_end(Simulation<Dim>& sim) {
   while (!sim.finished()) sim.step();
+}
+
+/// Every particle column after `steps` steps on at most `threads` threads (for the thread-count tests).
+template <int Dim>
+std::vector<std::vector<double>> state_after(const nlohmann::json& scene, int steps, int threads) {
+  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+  Simulation<Dim> sim(parse_scene(scene));
+  for (int s = 0; s < steps && !sim.finished(); ++s) sim.step();
+  std::vector<std::vector<double>> cols;
+  for (const auto& name : sim.particles().column_names()) {
+    const auto c = sim.particles().column(name);
+    cols.emplace_back(c.begin(), c.end());
+  }
+  return cols;
 }
 
 /// What a verification test reads from a bar run.

@@ -88,6 +88,8 @@ TEST_CASE("malformed scenes are refused with a message naming the key", "[scene]
       {"bad basis", &plate, "/grid/basis", "quadratic", "grid.basis"},
       {"bspline3 on the fast path", &plate, "/grid", R"({"length": [1, 1], "cells": [8, 8], "basis": "bspline3",
                                                          "basis_path": "fast"})"_json, "grid.basis_path"},
+      {"ddmpm on the generic path", &plate, "/grid", R"({"length": [1, 1], "cells": [8, 8], "basis": "ddmpm",
+                                                          "basis_path": "generic"})"_json, "grid.basis_path"},
       {"bad basis path", &plate, "/grid/basis_path", "quick", "grid.basis_path"},
       {"missing dimension", &plate, "/dimension", erase, "dimension"},
       {"dimension 3", &plate, "/dimension", 3, "dimension"},

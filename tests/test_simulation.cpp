@@ -3,7 +3,6 @@
 #include <algorithm>
 
 #include <catch2/catch.hpp>
-#include <tbb/global_control.h>
 
 #include "scene_builders.hpp"
 
@@ -14,20 +13,6 @@ namespace {
 
 bool contains(const std::vector<std::string>& v, const std::string& s) {
   return std::find(v.begin(), v.end(), s) != v.end();
-}
-
-/// All particle columns after `steps` steps with the given thread count.
-template <int Dim>
-std::vector<std::vector<double>> state_after(const nlohmann::json& scene, int steps, int threads) {
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
-  Simulation<Dim> sim(parse_scene(scene));
-  for (int s = 0; s < steps && !sim.finished(); ++s) sim.step();
-  std::vector<std::vector<double>> cols;
-  for (const auto& name : sim.particles().column_names()) {
-    const auto c = sim.particles().column(name);
-    cols.emplace_back(c.begin(), c.end());
-  }
-  return cols;
 }
 
 nlohmann::json block_scene(double vx) {
