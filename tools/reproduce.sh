@@ -42,14 +42,16 @@ study plate-mls tools/scenes/plate-paper.json --set time.end=0.0125 --set algori
 # thesis Fig 5.9 and Table 5.3: bar without grid crossing (Table 5.2), 5-40 cells, 12 particles per cell
 study bar-mpm tools/scenes/bar.json --repeat 5 --set grid.basis=linear --vary 'grid.cells=[5],[10],[20],[40]' \
   --vary algorithm.mapping=direct,cubic-spline,tls
+study bar-ddmpm tools/scenes/bar.json --repeat 5 --set grid.basis=ddmpm --vary 'grid.cells=[5],[10],[20],[40]' \
+  --vary algorithm.mapping=direct,cubic-spline,tls
 study bar-bsmpm tools/scenes/bar.json --repeat 5 --vary 'grid.cells=[5],[10],[20],[40]' \
   --vary algorithm.mapping=direct,cubic-spline,tls
 # thesis Figs 5.12-5.13 and Table 5.5: large-deformation bar (Table 5.4), 20 cells, 8 particles per cell
-study bar-large tools/scenes/bar-large.json --vary 'grid.cells=[20],[40],[80]' --vary grid.basis=linear,bspline2 \
+study bar-large tools/scenes/bar-large.json --vary 'grid.cells=[20],[40],[80]' --vary grid.basis=linear,ddmpm,bspline2 \
   --vary algorithm.mapping=direct,cubic-spline,tls
 # thesis Fig 5.14 and Table 5.7: column compaction (Table 5.6), 50 cells, 20 particles per cell
 study column tools/scenes/column-compaction.json --vary 'grid.cells=[25],[50],[100]' \
-  --vary grid.basis=linear,bspline2 --vary algorithm.mapping=direct,cubic-spline,tls
+  --vary grid.basis=linear,ddmpm,bspline2 --vary algorithm.mapping=direct,cubic-spline,tls
 # thesis §4.6.2: bar with a traction at its free end (neo-Hookean as in the thesis, and linear elastic)
 study bar-traction tools/scenes/bar-traction.json --vary 'grid.cells=[20],[40],[80],[160]' \
   --vary material.model=neo-hookean,linear-elastic --vary algorithm.mapping=direct,cubic-spline,tls

@@ -18,6 +18,7 @@ PLATE_05_DIRECT = "plate A=0.05, BSMPM, MUSL, lumped"
 CASES = [
     # (label, scene, overrides, resolutions, direct-mapping row to compare the cost with)
     ("bar, MPM-P1, MUSL, lumped", "bar.json", ["grid.basis=linear", "algorithm.mass=lumped"], [10, 20, 40], None),
+    ("bar, DDMPM, MUSL, lumped", "bar.json", ["grid.basis=ddmpm", "algorithm.mass=lumped"], [10, 20, 40], None),
     ("bar, BSMPM, MUSL, lumped", "bar.json", ["grid.basis=bspline2", "algorithm.mass=lumped"], [10, 20, 40], None),
     (BAR_DIRECT, "bar.json", ["grid.basis=bspline2", "algorithm.mass=projection"], [10, 20, 40], None),
     ("bar, BSMPM-TLS, MUSL, projection", "bar.json", ["algorithm.mapping=tls", "algorithm.mass=projection"],
@@ -25,6 +26,7 @@ CASES = [
     ("bar, BSMPM-CS (cubic spline), MUSL, projection", "bar.json",
      ["algorithm.mapping=cubic-spline", "algorithm.mass=projection"], [10, 20, 40], BAR_DIRECT),
     (PLATE_05_DIRECT, "plate.json", ["algorithm.mass=lumped"], [8, 16, 32], None),
+    ("plate A=0.05, DDMPM, MUSL, lumped", "plate.json", ["grid.basis=ddmpm"], [8, 16, 32], None),
     ("plate A=0.05, BSMPM, MUSL, projection", "plate.json", ["algorithm.mass=projection"], [8, 16, 32], None),
     ("plate A=0.05, BSMPM-MLS (support 2h), MUSL, lumped", "plate.json", ["algorithm.mapping=mls"], [8, 16],
      PLATE_05_DIRECT),
