@@ -136,7 +136,7 @@ const std::vector<std::pair<std::string, Keys>>& sections() {
       {"grid", {"length", "cells", "basis", "basis_path"}},
       {"particles", {"per_cell", "layout", "seed"}},
       {"material", {"model", "E", "nu", "density"}},
-      {"algorithm", {"update", "mass", "mapping", "gauss_per_cell", "mls_support", "tls_degree"}},
+      {"algorithm", {"update", "mass", "mapping", "gauss_per_cell", "mls_support", "tls_degree", "ddmpm_subpoints"}},
       {"time", {"dt", "cfl", "end", "energy_tolerance"}},
       {"output", {"file", "every", "checkpoint_every"}},
   };
@@ -417,7 +417,8 @@ json source_of(const Scene& s, const ProblemInfo* info) {
   const AlgorithmSpec& a = s.algorithm;
   j["algorithm"] = {{"update", name_of(a.update, kUpdate)}, {"mass", name_of(a.mass, kMass)},
                     {"mapping", name_of(a.mapping, kMapping)}, {"gauss_per_cell", vec(a.gauss_per_cell)},
-                    {"mls_support", a.mls_support}, {"tls_degree", a.tls_degree}};
+                    {"mls_support", a.mls_support}, {"tls_degree", a.tls_degree},
+                    {"ddmpm_subpoints", a.ddmpm_subpoints}};
   j["time"] = {{"end", s.time.end}};
   if (s.time.dt) j["time"]["dt"] = *s.time.dt;
   if (s.time.cfl) j["time"]["cfl"] = *s.time.cfl;
@@ -501,6 +502,18 @@ void read_algorithm(const Node& top, Scene& s) {
   a.gauss_per_cell = integers(alg, "gauss_per_cell", dim, 2, 1, 10, "an array of " + std::to_string(dim) + " integers in 1..10");
   a.mls_support = number(alg, "mls_support", 2.0, [](double r) { return r > 0.5 && r <= 10; }, "a number in (0.5, 10] (cells)");
   a.tls_degree = static_cast<int>(integer(alg, "tls_degree", 1, 0, 2, "0, 1 or 2"));
+  a.ddmpm_subpoints = static_cast<int>(integer(alg, "ddmpm_subpoints", 1, 1, 1024, "an integer in 1..1024"));
+  if (const json* sub = alg.find("ddmpm_subpoints"); sub && a.ddmpm_subpoints > 1) {
+    // the sub-point integration of Dhakal & Zhang replaces DDMPM's particle integration of the force in 1D
+    if (s.grid.basis != Basis::ddmpm)
+      fail("algorithm.ddmpm_subpoints", *sub, "sub-points need grid.basis = \"ddmpm\", not \"" +
+                                                  std::string(name_of(s.grid.basis, kBasis)) + "\"");
+    if (dim != 1) fail("algorithm.ddmpm_subpoints", *sub, "sub-points are defined in 1D only; this scene has dimension 2");
+    if (a.mapping != Mapping::direct)
+      fail("algorithm.ddmpm_subpoints", *sub, "sub-points integrate the particles' own stress: expected "
+                                              "algorithm.mapping = \"direct\", not \"" +
+                                                  std::string(name_of(a.mapping, kMapping)) + "\"");
+  }
 }
 
 /// Exactly one of dt and cfl; the problem's dt applies only when the scene gives neither.

@@ -71,6 +71,7 @@ struct AlgorithmSpec {
   std::array<int, 3> gauss_per_cell{2, 2, 2};
   double mls_support = 2.0;  ///< MLS weight scaling in cells: r = (x - x_p) / (mls_support h); paper eq. 9 prints 2 (support ±3h)
   int tls_degree = 1;        ///< Taylor basis degree for TLS (0, 1, 2)
+  int ddmpm_subpoints = 1;   ///< DDMPM (1D): internal-force integration points per particle (Dhakal & Zhang); 1: none
 };
 
 struct TimeSpec {

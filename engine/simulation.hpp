@@ -64,8 +64,9 @@ using AnyBasis = std::variant<TensorBasis<Dim, UniformAxis<2>>, TensorBasis<Dim,
                               TensorBasis<Dim, CoxDeBoorAxis<2>>, TensorBasis<Dim, CoxDeBoorAxis<3>>,
                               TensorBasis<Dim, CoxDeBoorAxis<4>>, TensorBasis<Dim, DualDomainAxis>>;
 
+/// The basis of a grid; DDMPM's axes also carry the force sub-points per particle (algorithm.ddmpm_subpoints).
 template <int Dim>
-AnyBasis<Dim> make_basis(const GridSpec& grid);
+AnyBasis<Dim> make_basis(const GridSpec& grid, int ddmpm_subpoints = 1);
 
 /// Grid arrays, one entry per DOF (tensor-product basis function).
 template <int Dim>
@@ -144,6 +145,8 @@ class Simulation {
   void check_momentum(const MomentumTotals<Dim>& particles);
   void apply_fixed(std::array<std::vector<double>, Dim>& field);
   void raise_unstable(std::size_t particle, const char* stage) const;
+  /// With DDMPM sub-points: every particle shorter than two cells, so its sub-points stay within a cell of it.
+  void check_subpoint_reach() const;
   std::array<const double*, Dim> reference_columns() const;
 
   Scene scene_;

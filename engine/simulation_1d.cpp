@@ -4,6 +4,6 @@
 namespace mpm {
 
 template class Simulation<1>;
-template AnyBasis<1> make_basis<1>(const GridSpec&);
+template AnyBasis<1> make_basis<1>(const GridSpec&, int);
 
 }  // namespace mpm

@@ -4,6 +4,6 @@
 namespace mpm {
 
 template class Simulation<2>;
-template AnyBasis<2> make_basis<2>(const GridSpec&);
+template AnyBasis<2> make_basis<2>(const GridSpec&, int);
 
 }  // namespace mpm

@@ -204,7 +204,7 @@ GridView<Dim> GridState<Dim>::view() {
 }
 
 template <int Dim>
-AnyBasis<Dim> make_basis(const GridSpec& grid) {
+AnyBasis<Dim> make_basis(const GridSpec& grid, int ddmpm_subpoints) {
   const int p = degree_of(grid.basis);
   auto build = [&](auto axis_of) {
     using Axis = decltype(axis_of(0));
@@ -214,7 +214,8 @@ AnyBasis<Dim> make_basis(const GridSpec& grid) {
     else return AnyBasis<Dim>(TensorBasis<Dim, Axis>{{axis_of(0), axis_of(1)}, functions});
   };
   auto knots = [&](int d) { return KnotVector::open_uniform(p, grid.cells[d], grid.length[d]); };
-  if (grid.basis == Basis::ddmpm) return build([&](int d) { return DualDomainAxis(grid.cells[d], grid.length[d]); });
+  if (grid.basis == Basis::ddmpm)
+    return build([&](int d) { return DualDomainAxis(grid.cells[d], grid.length[d], ddmpm_subpoints); });
   if (grid.path == BasisPath::fast && p <= 2) {
     if (p == 1) return build([&](int d) { return UniformAxis<2>(grid.cells[d], grid.length[d]); });
     return build([&](int d) { return UniformAxis<3>(grid.cells[d], grid.length[d]); });
@@ -229,7 +230,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
     : scene_(scene),
       problem_(make_problem<Dim>(scene)),
       material_(make_material(scene.material)),
-      basis_(make_basis<Dim>(scene.grid)),
+      basis_(make_basis<Dim>(scene.grid, scene.algorithm.ddmpm_subpoints)),
       store_(0, FieldSet{}),
       bins_([&] {
         std::array<int, Dim> c;
@@ -239,7 +240,9 @@ Simulation<Dim>::Simulation(const Scene& scene)
           l[d] = scene.grid.length[d];
         }
         const int reach = stencil_reach(stencil_width_of(scene.grid.basis));
-        return CellBins<Dim>(c, l, CellBins<Dim>::block_width_for(reach, bin_slack_cells));
+        // DDMPM's force sub-points lie up to a cell beyond their particle (check_subpoint_reach)
+        const int slack = bin_slack_cells + (scene.algorithm.ddmpm_subpoints > 1 ? 1 : 0);
+        return CellBins<Dim>(c, l, CellBins<Dim>::block_width_for(reach, slack));
       }()) {
   if (scene.dimension != Dim) throw std::logic_error("Simulation: scene dimension does not match");
 
@@ -316,9 +319,11 @@ Simulation<Dim>::Simulation(const Scene& scene)
     particle_cells_.emplace(CellBins<Dim>::single_cells_in_order_of(bins_));
   }
   pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force());
-  if (problem_->has_point_loads())
-    for (auto& st : pipeline_)
-      if (st.rfind("p2g-force", 0) == 0) st += "+point-load";
+  for (auto& st : pipeline_)
+    if (st.rfind("p2g-force", 0) == 0) {
+      if (scene.algorithm.ddmpm_subpoints > 1) st += "+subpoints";
+      if (problem_->has_point_loads()) st += "+point-load";
+    }
   if (gauss_) {  // every scatter reads the Gauss points, rebuilt from the particles just before it
     const std::string rebuild = std::string(gauss_->name()) + "-rebuild+";
     std::vector<std::string> stages;
@@ -462,6 +467,22 @@ void Simulation<Dim>::raise_unstable(std::size_t p, const char* stage) const {
   throw UnstableRun(msg.str());
 }
 
+template <int Dim>
+void Simulation<Dim>::check_subpoint_reach() const {
+  const auto x = store_.column(Field::position, 0), F = store_.column(Field::deformation, 0),
+             V0 = store_.column(Field::volume0);
+  const double h = scene_.grid.length[0] / scene_.grid.cells[0];
+  for (std::size_t p = 0; p < store_.size(); ++p)
+    if (!(F[p] * V0[p] < 2.0 * h)) {
+      std::ostringstream msg;
+      msg.precision(6);
+      msg << "unstable at step " << step_ + 1 << " (t = " << time_ + dt_ << " s), p2g-force: particle " << p
+          << " at x = " << x[p] << " is " << F[p] * V0[p] << " m long, two cells or more (h = " << h
+          << " m): its algorithm.ddmpm_subpoints would reach beyond the coloured scatter's blocks";
+      throw UnstableRun(msg.str());
+    }
+}
+
 /// Consistent-mass solve M x = rhs on the free DOFs (not fixed, not empty), per component, by conjugate gradients
 /// with the lumped mass as (Jacobi) preconditioner; M is applied matrix-free (transfer.hpp). Thesis eqs 3.9–3.10.
 template <int Dim>
@@ -556,6 +577,8 @@ double Simulation<Dim>::step_with(const B& basis, const M& material, const F& bo
   // rebuilt from the particles first (with stress and body force when the force is scattered)
   // (only_velocities_changed: since the last scatter, as in MUSL's second P2G; the reconstruction reuses its work)
   auto scatter = [&]<ScatterFields Fields>(bool only_velocities_changed = false) {
+    if constexpr (Fields.force)
+      if (scene_.algorithm.ddmpm_subpoints > 1) check_subpoint_reach();
     if (gauss_) {
       const MomentumTotals<Dim> totals = only_velocities_changed
                                              ? gauss_->rebuild_momentum(pv, *particle_cells_, bins_, body)

@@ -21,8 +21,12 @@ struct DualDomainAxis {
   static constexpr int width = 4;
   double inv_h;  ///< 1 / cell size
   int cells;
+  /// Internal-force integration points per particle (DDMPM with sub-points, thesis Table 5.8; 1D): the force
+  /// scatter integrates ∇̄φ_i σ_p over the particle's length at this many points (transfer.hpp); 1: at x_p.
+  int subpoints = 1;
 
-  DualDomainAxis(int cells_, double length) : inv_h(cells_ / length), cells(cells_) {}
+  DualDomainAxis(int cells_, double length, int subpoints_ = 1)
+      : inv_h(cells_ / length), cells(cells_), subpoints(subpoints_) {}
 
   AxisWeights<4> operator()(double x) const {
     const double s = x * inv_h;

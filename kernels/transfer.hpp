@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <concepts>
 #include <cstddef>
 #include <vector>
 
@@ -115,6 +116,25 @@ MPM_INLINE void scatter_rows(const Stencil<Dim, S>& st, GridView<Dim> g, double 
   });
 }
 
+/// Bases whose force integration may use sub-points (DualDomainAxis).
+template <class Axis>
+concept WithSubpoints = requires(const Axis& a) { a.subpoints; };
+
+/// DDMPM with sub-points (Dhakal & Zhang 2016, thesis §2.6.4 and Table 5.8), 1D: the internal force of a particle
+/// integrated at n points spread evenly over its current length l_p = V_p, each carrying V_p σ_p / n:
+/// f_i −= Σ_s ∇̄φ_i(x_s) V_p σ_p / n, instead of ∇̄φ_i(x_p) V_p σ_p. (The points stay within a cell of x_p:
+/// Simulation checks l_p < 2h and widens the coloured blocks by that cell.)
+template <int S, class Axis>
+MPM_INLINE void scatter_subpoint_stress(const TensorBasis<1, Axis>& basis, GridView<1> g, double xp, double V,
+                                        double Vsig) {
+  const int n = basis.axis[0].subpoints;
+  const double share[1][1] = {{Vsig / n}}, none[1] = {0.0};
+  for (int s = 0; s < n; ++s) {
+    const double xs[1] = {xp + ((s + 0.5) / n - 0.5) * V};
+    scatter_rows<ScatterFields{false, false, true}>(stencil_at<1, S>(basis, xs), g, 0.0, none, share, none);
+  }
+}
+
 /// P2G over particles order[begin..end): adds the selected sums into the grid; returns the particle momentum of
 /// the range when momentum is scattered.
 template <ScatterFields Fields, int Dim, int S, class Axis, class Body>
@@ -147,6 +167,11 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
         const auto b = body.template at<Dim>(ip);
         for (int d = 0; d < Dim; ++d) mb[d] = mp * b[d];
       }
+      if constexpr (Dim == 1 && WithSubpoints<Axis>)
+        if (basis.axis[0].subpoints > 1) {
+          scatter_subpoint_stress<S>(basis, g, xp[0], V, Vsig[0][0]);
+          Vsig[0][0] = 0.0;  // the particle itself carries mass, momentum and body force only
+        }
     }
     scatter_rows<Fields>(st, g, mp, mv, Vsig, mb);
   }

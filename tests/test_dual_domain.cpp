@@ -8,6 +8,7 @@
 #include "kernels/bspline.hpp"
 #include "kernels/dual_domain.hpp"
 #include "kernels/quadrature.hpp"
+#include "kernels/transfer.hpp"
 
 using namespace mpm;
 
@@ -101,4 +102,41 @@ TEST_CASE("DDMPM axis: gradients are continuous across cell boundaries, where P1
     // P1's gradient of the node itself jumps from 1/h to −1/h; DDMPM's is 0 there (α = 0, centred difference)
     CHECK(std::abs(right.dw[node + 1 - right.first]) < 1e-6 / h);
   }
+}
+
+TEST_CASE("DDMPM sub-points: the force scatter integrates the particle's stress at n points over its length",
+          "[basis][ddmpm][subpoints]") {
+  // One particle, stretched (J = 1.3), mass and stress given: the grid force must be −Σ_s ∇̄φ_i(x_s) V σ / n with
+  // x_s evenly spread over [x_p − V/2, x_p + V/2], computed here from the axis directly.
+  const int cells = 5, n = 7;
+  const TensorBasis<1, DualDomainAxis> basis{{DualDomainAxis(cells, length, n)}, {cells + 3}};
+  double x = 1.17, v = 0.0, F = 1.3, s = 2.5e3, m = 0.4, V0 = 0.2;
+  ParticleView<1> p;
+  p.x[0] = &x;
+  p.v[0] = &v;
+  p.F[0] = &F;
+  p.s[0] = &s;
+  p.m = &m;
+  p.V0 = &V0;
+  std::vector<double> gm(cells + 3, 0.0), gf(cells + 3, 0.0), expected(cells + 3, 0.0);
+  GridView<1> g;
+  g.stride1 = g.dofs = cells + 3;
+  g.m = gm.data();
+  g.f[0] = gf.data();
+  const unsigned order[1] = {0};
+  scatter_p2g<ScatterFields{true, false, true}, 1, 4>(basis, p, g, order, 0, 1, NoBodyForce{});
+  const double V = F * V0;
+  for (int k = 0; k < n; ++k) {
+    const AxisWeights<4> a = basis.axis[0](x - V / 2 + (k + 0.5) * V / n);
+    for (int r = 0; r < 4; ++r) expected[a.first + r] -= a.dw[r] * V * s / n;
+  }
+  double total = 0.0;
+  for (int f = 0; f < cells + 3; ++f) {
+    INFO("function " << f);
+    CHECK(gf[f] == Approx(expected[f]).margin(1e-12 * V * s));
+    total += gf[f];
+  }
+  CHECK(total == Approx(0.0).margin(1e-12 * V * s));  // internal forces sum to zero: momentum is conserved
+  const AxisWeights<4> at = basis.axis[0](x);  // the mass still goes to the particle's own stencil
+  for (int r = 0; r < 4; ++r) CHECK(gm[at.first + r] == Approx(at.w[r] * m));
 }

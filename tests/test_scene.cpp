@@ -53,6 +53,25 @@ TEST_CASE("valid base scenes parse", "[scene]") {
   CHECK(error_of(bodies).empty());
 }
 
+TEST_CASE("DDMPM sub-points are refused outside 1D DDMPM with direct mapping - the message names both keys", "[scene][ddmpm]") {
+  json b = bar;
+  b["grid"]["basis"] = "ddmpm";
+  b["algorithm"]["ddmpm_subpoints"] = 8;
+  CHECK(error_of(b).empty());
+  b["algorithm"]["ddmpm_subpoints"] = 0;
+  CHECK_THAT(error_of(b), Catch::Contains("algorithm.ddmpm_subpoints"));
+  b["algorithm"]["ddmpm_subpoints"] = 8;
+  b["algorithm"]["mapping"] = "tls";
+  CHECK_THAT(error_of(b), Catch::Contains("algorithm.ddmpm_subpoints") && Catch::Contains("algorithm.mapping"));
+  json p = plate;
+  p["grid"]["basis"] = "ddmpm";
+  p["algorithm"]["ddmpm_subpoints"] = 8;
+  CHECK_THAT(error_of(p), Catch::Contains("algorithm.ddmpm_subpoints") && Catch::Contains("dimension"));
+  json q = bar;
+  q["algorithm"]["ddmpm_subpoints"] = 8;
+  CHECK_THAT(error_of(q), Catch::Contains("algorithm.ddmpm_subpoints") && Catch::Contains("grid.basis"));
+}
+
 TEST_CASE("malformed scenes are refused with a message naming the key", "[scene]") {
   const std::vector<Malformed> cases = {
       {"unknown key in grid", &plate, "/grid/cels", json::array({8, 8}), "grid.cels"},
@@ -91,6 +110,7 @@ TEST_CASE("malformed scenes are refused with a message naming the key", "[scene]
       {"ddmpm on the generic path", &plate, "/grid", R"({"length": [1, 1], "cells": [8, 8], "basis": "ddmpm",
                                                           "basis_path": "generic"})"_json, "grid.basis_path"},
       {"bad basis path", &plate, "/grid/basis_path", "quick", "grid.basis_path"},
+      {"DDMPM sub-points without ddmpm", &bar, "/algorithm", R"({"ddmpm_subpoints": 4})"_json, "algorithm.ddmpm_subpoints"},
       {"missing dimension", &plate, "/dimension", erase, "dimension"},
       {"dimension 3", &plate, "/dimension", 3, "dimension"},
       {"dimension as a string", &plate, "/dimension", "2", "dimension"},
