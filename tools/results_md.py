@@ -349,8 +349,8 @@ materials' errors agree to a few per cent). The stress has a kink at the wave fr
 thesis: "slightly lower than expected"). The end first moves inwards, by 2.2 mm at T = 0.4 s: the end cell
 partly empties but, on these grids (h ≥ 7.8 mm), never completely; direct mapping and CS do not notice. TLS
 completes the end cell's stress fit from elsewhere (the fallbacks column) only when it holds fewer than 3
-particles, one more than the two Taylor functions of a linear 1D fit: here never. Until session 10 the threshold
-was 4, and 80 and 160 cells counted 234 and 2728 fallbacks, with σ errors within 5 % of these.
+particles, one more than the two Taylor functions of a linear 1D fit: here never. With a threshold of 4 (two
+samples per Taylor function) 80 and 160 cells count 234 and 2728 fallbacks, with σ errors within 5 % of these.
 
 ![traction convergence]({rel}/traction_convergence.png)
 
