@@ -8,7 +8,7 @@
 // peak/fma_avx512/threads:<T>: the FMA peak, 16 independent chains of 512-bit fused multiply-adds per thread
 // (compiled for AVX-512 on this function only; skipped where the CPU has none). 1 FMA = 2 flops.
 // peak/fma_avx2/threads:<T>: the same with 12 chains of 256-bit FMAs, for CPUs without AVX-512 (e.g. AMD Zen 3,
-// where the sessions' machines have also run).
+// on which this engine has also been measured).
 #include <cstdint>
 #include <memory>
 #include <string>

@@ -333,9 +333,9 @@ MPM error by a factor of 10; CS slightly below TLS.
 
 TLS on the column, with the thesis' 20 particles per cell, converges like direct BSMPM: σ RMS 40.7 → 12.1 → 4.42 →
 1.46 Pa on 10 → 20 → 40 → 80 cells (MUSL, dt = 1e-4 s; least-squares order 1.59; direct BSMPM 35.7 → 12.1 → 3.96 →
-1.75 Pa; dt/4 changes the 40- and 80-cell errors by < 1 %), checked by `tests/test_verification.cpp`. Before the
-reconstruction changes of docs/RECONSTRUCTION.md (momentum as ρ̂v̂, conditioning-tested neighbour completion, the
-limiter) it stalled at 6.2 Pa from 40 cells on. With 4 particles per cell MUSL-TLS still stops on the energy guard
+1.75 Pa; dt/4 changes the 40- and 80-cell errors by < 1 %), checked by `tests/test_verification.cpp`. Without the
+reconstruction choices of docs/RECONSTRUCTION.md (momentum as ρ̂v̂, conditioning-tested neighbour completion, the
+limiter) it stalls at 6.2 Pa from 40 cells on. With 4 particles per cell MUSL-TLS still stops on the energy guard
 at 40 and 80 cells (exit 3, energy gain > 15 %) where USL-TLS converges (50 → 25 → 12 → 2.9 Pa): MUSL's second
 projection, of the updated velocities through the reconstruction, gains energy when cells hold few particles
 (see also the falling block in docs/STABILITY.md).
@@ -353,8 +353,8 @@ materials' errors agree to a few per cent). The stress has a kink at the wave fr
 thesis: "slightly lower than expected"). The end first moves inwards, by 2.2 mm at T = 0.4 s: the end cell
 partly empties but, on these grids (h ≥ 7.8 mm), never completely; direct mapping and CS do not notice. TLS
 completes the end cell's stress fit from elsewhere (the fallbacks column) only when it holds fewer than 3
-particles, one more than the two Taylor functions of a linear 1D fit: here never. Until session 10 the threshold
-was 4, and 80 and 160 cells counted 234 and 2728 fallbacks, with σ errors within 5 % of these.
+particles, one more than the two Taylor functions of a linear 1D fit: here never. With a threshold of 4 (two
+samples per Taylor function) 80 and 160 cells count 234 and 2728 fallbacks, with σ errors within 5 % of these.
 
 ![traction convergence]({rel}/traction_convergence.png)
 

@@ -14,9 +14,9 @@
 #   --no-build   run the programs already in the build tree (e.g. while the engine sources do not compile)
 #   --docs       where bench_table.md and throughput.png go (default: docs/ of the repository)
 #   --wait-idle  before each program, wait (at most SECONDS) until other processes use < 10 % of the CPUs
-#   --nice       run the programs under `nice -n N`, each in a session of its own whose scheduler autogroup also
-#                gets nice N (with kernel.sched_autogroup_enabled=1, plain nice only ranks processes inside one
-#                session). On a shared machine a negative N (needs root) puts the benchmarks ahead of other work
+#   --nice       run the programs under `nice -n N`, each started by setsid so that it gets a scheduler autogroup
+#                of its own, which also gets nice N (with kernel.sched_autogroup_enabled=1, plain nice only ranks
+#                processes inside one autogroup). On a shared machine a negative N (needs root) puts the benchmarks ahead of other work
 #                (compiles, tests), which otherwise takes one of the two cores and distorts the 2-thread figures;
 #                it also slows that other work down while the suite runs, so use it briefly and say so.
 #
@@ -125,7 +125,7 @@ for prog in "${programs[@]}"; do
   b0=$(busy_jiffies)
   prefix=()
   if [[ -n "$nice_level" ]]; then
-    # new session = new autogroup; set its nice (best effort), then the process's own
+    # setsid gives a new autogroup; set its nice (best effort), then the process's own
     prefix=(setsid --wait sh -c 'echo "$0" > /proc/self/autogroup 2>/dev/null; exec nice -n "$0" "$@"' "$nice_level")
   fi
   /usr/bin/time -f '%e %U %S' -o "$results/$prog.time" "${prefix[@]}" "$exe" "${args[@]}" > "$out"
