@@ -52,6 +52,10 @@ study bar-large tools/scenes/bar-large.json --vary 'grid.cells=[20],[40],[80]' -
 # thesis Fig 5.14 and Table 5.7: column compaction (Table 5.6), 50 cells, 20 particles per cell
 study column tools/scenes/column-compaction.json --vary 'grid.cells=[25],[50],[100]' \
   --vary grid.basis=linear,ddmpm,bspline2 --vary algorithm.mapping=direct,cubic-spline,tls
+# thesis Table 5.8: DDMPM with sub-points on the column, beside DDMPM-TLS (50 cells, 20 particles per cell)
+study column-subpoints tools/scenes/column-compaction.json --repeat 3 --set grid.basis=ddmpm \
+  --set algorithm.mapping=direct --vary 'grid.cells=[50]' --vary algorithm.ddmpm_subpoints=1,2,4,8,16,32,64,128
+study column-ddmpm-tls tools/scenes/column-compaction.json --repeat 3 --set grid.basis=ddmpm --vary 'grid.cells=[50]'
 # thesis §4.6.2: bar with a traction at its free end (neo-Hookean as in the thesis, and linear elastic)
 study bar-traction tools/scenes/bar-traction.json --vary 'grid.cells=[20],[40],[80],[160]' \
   --vary material.model=neo-hookean,linear-elastic --vary algorithm.mapping=direct,cubic-spline,tls
