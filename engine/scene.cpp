@@ -133,7 +133,7 @@ struct Node {
 /// Where a key misplaced at the top level belongs, for the "did you mean" hint.
 const std::vector<std::pair<std::string, Keys>>& sections() {
   static const std::vector<std::pair<std::string, Keys>> s = {
-      {"grid", {"length", "cells", "basis", "basis_path"}},
+      {"grid", {"length", "cells", "basis", "basis_path", "maxent_dmax"}},
       {"particles", {"per_cell", "layout", "seed"}},
       {"material", {"model", "E", "nu", "density"}},
       {"algorithm", {"update", "mass", "mapping", "gauss_per_cell", "mls_support", "tls_degree", "ddmpm_subpoints"}},
@@ -279,8 +279,11 @@ std::array<int, 3> integers(const Node& n, const std::string& key, int dim, std:
 // ---------------------------------------------------------------------------------------------------------
 // Names
 
-constexpr std::array<std::pair<const char*, Basis>, 4> kBasis{
-    {{"linear", Basis::linear}, {"bspline2", Basis::bspline2}, {"bspline3", Basis::bspline3}, {"ddmpm", Basis::ddmpm}}};
+constexpr std::array<std::pair<const char*, Basis>, 5> kBasis{{{"linear", Basis::linear},
+                                                              {"bspline2", Basis::bspline2},
+                                                              {"bspline3", Basis::bspline3},
+                                                              {"ddmpm", Basis::ddmpm},
+                                                              {"maxent", Basis::maxent}}};
 constexpr std::array<std::pair<const char*, BasisPath>, 2> kPath{{{"fast", BasisPath::fast}, {"generic", BasisPath::generic}}};
 constexpr std::array<std::pair<const char*, Layout>, 3> kLayout{
     {{"uniform", Layout::uniform}, {"gauss", Layout::gauss}, {"random", Layout::random}}};
@@ -411,6 +414,7 @@ json source_of(const Scene& s, const ProblemInfo* info) {
   }
   j["grid"] = {{"length", vec(s.grid.length)}, {"cells", vec(s.grid.cells)}, {"basis", name_of(s.grid.basis, kBasis)},
                {"basis_path", name_of(s.grid.path, kPath)}};
+  if (s.grid.basis == Basis::maxent) j["grid"]["maxent_dmax"] = s.grid.maxent_dmax;
   j["particles"] = {{"per_cell", s.particles.layout == Layout::random ? json(s.particles.per_cell[0]) : vec(s.particles.per_cell)},
                     {"layout", name_of(s.particles.layout, kLayout)}, {"seed", s.particles.seed}};
   j["material"] = material_json(s.material);
@@ -452,8 +456,13 @@ void read_grid(const Node& top, Scene& s, const ProblemInfo* info) {
   s.grid.path = choice(grid, "basis_path", s.grid.basis == Basis::bspline3 ? BasisPath::generic : BasisPath::fast, kPath);
   if (s.grid.basis == Basis::bspline3 && s.grid.path == BasisPath::fast)
     fail("grid.basis_path", *grid.find("basis_path"), "there is no fast path for bspline3; use \"generic\"");
-  if (s.grid.basis == Basis::ddmpm && s.grid.path == BasisPath::generic)
-    fail("grid.basis_path", *grid.find("basis_path"), "grid.basis = \"ddmpm\" has one closed-form path; use \"fast\"");
+  if (has_ghost_ends(s.grid.basis) && s.grid.path == BasisPath::generic)
+    fail("grid.basis_path", *grid.find("basis_path"),
+         "grid.basis = \"" + name_of(s.grid.basis, kBasis) + "\" has one path; use \"fast\"");
+  if (const json* d = grid.find("maxent_dmax"); d && s.grid.basis != Basis::maxent)
+    fail("grid.maxent_dmax", *d, "it applies to grid.basis = \"maxent\" only, not \"" + name_of(s.grid.basis, kBasis) + "\"");
+  s.grid.maxent_dmax = number(grid, "maxent_dmax", 2.0, [](double d) { return d > 1.0 && d <= 2.0; },
+                              "a number in (1, 2] (the prior's support radius in cells; the stencil holds 4 nodes per axis)");
 
   // Problems whose body does not fill the grid need a grid that holds it.
   if (info && info->id == ProblemName::column_compaction && s.problem.height > s.grid.length[0])

@@ -17,7 +17,7 @@ struct SceneError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class Basis { linear, bspline2, bspline3, ddmpm };
+enum class Basis { linear, bspline2, bspline3, ddmpm, maxent };
 enum class BasisPath { fast, generic };
 enum class Layout { uniform, gauss, random };
 enum class MaterialModel { linear_elastic, neo_hookean };
@@ -26,21 +26,26 @@ enum class MassMatrix { lumped, projection, consistent };
 enum class Mapping { direct, mls, tls, cubic_spline };
 enum class ProblemName { none, vibrating_bar, vibrating_plate, column_compaction, vibrating_bar_traction };
 
-/// Polynomial degree of a basis choice (DDMPM: its piecewise-linear values).
-constexpr int degree_of(Basis b) { return b == Basis::linear || b == Basis::ddmpm ? 1 : b == Basis::bspline2 ? 2 : 3; }
+/// Polynomial degree of a basis choice (DDMPM: its piecewise-linear values; max-ent: linear completeness).
+constexpr int degree_of(Basis b) {
+  return b == Basis::bspline2 ? 2 : b == Basis::bspline3 ? 3 : 1;
+}
 
-/// Functions non-zero at a point, per axis: degree + 1 for B-splines; DDMPM's smoothed gradients reach one node
-/// beyond each side of the cell (kernels/dual_domain.hpp).
-constexpr int stencil_width_of(Basis b) { return b == Basis::ddmpm ? 4 : degree_of(b) + 1; }
+/// DDMPM and max-ent number their functions with a ghost at each end of an axis (kernels/dual_domain.hpp).
+constexpr bool has_ghost_ends(Basis b) { return b == Basis::ddmpm || b == Basis::maxent; }
 
-/// Basis functions along an axis of `cells` cells: cells + degree on the open knot vector; DDMPM's cells + 1
-/// nodes and a ghost function at each end (kernels/dual_domain.hpp).
-constexpr int functions_per_axis(Basis b, int cells) { return b == Basis::ddmpm ? cells + 3 : cells + degree_of(b); }
+/// Functions non-zero at a point, per axis: degree + 1 for B-splines; DDMPM's smoothed gradients and max-ent's
+/// priors (d_max ≤ 2 cells) reach one node beyond each side of the cell.
+constexpr int stencil_width_of(Basis b) { return has_ghost_ends(b) ? 4 : degree_of(b) + 1; }
+
+/// Basis functions along an axis of `cells` cells: cells + degree on the open knot vector; the cells + 1 nodes
+/// and a ghost function at each end for DDMPM and max-ent.
+constexpr int functions_per_axis(Basis b, int cells) { return has_ghost_ends(b) ? cells + 3 : cells + degree_of(b); }
 
 /// The function that carries the boundary value at the lower or upper end of an axis (the interpolatory end
-/// function of the open knot vector; DDMPM's end node, next to its ghost).
+/// function of the open knot vector; the end node, next to its ghost).
 constexpr int boundary_function(Basis b, int cells, bool upper) {
-  const int ghost = b == Basis::ddmpm ? 1 : 0;
+  const int ghost = has_ghost_ends(b) ? 1 : 0;
   return upper ? functions_per_axis(b, cells) - 1 - ghost : ghost;
 }
 
@@ -49,6 +54,7 @@ struct GridSpec {
   std::array<int, 3> cells{1, 1, 1};      ///< knot spans per axis
   Basis basis = Basis::bspline2;
   BasisPath path = BasisPath::fast;
+  double maxent_dmax = 2.0;  ///< max-ent prior support radius in cells (thesis eq. 4.47, d_max; 1 < d_max ≤ 2)
 };
 
 struct ParticleSpec {

@@ -19,6 +19,7 @@
 #include "engine/problem.hpp"
 #include "engine/scene.hpp"
 #include "kernels/dual_domain.hpp"
+#include "kernels/max_ent.hpp"
 #include "kernels/stencil.hpp"
 #include "kernels/transfer.hpp"
 
@@ -62,7 +63,8 @@ struct CriticalStep {
 template <int Dim>
 using AnyBasis = std::variant<TensorBasis<Dim, UniformAxis<2>>, TensorBasis<Dim, UniformAxis<3>>,
                               TensorBasis<Dim, CoxDeBoorAxis<2>>, TensorBasis<Dim, CoxDeBoorAxis<3>>,
-                              TensorBasis<Dim, CoxDeBoorAxis<4>>, TensorBasis<Dim, DualDomainAxis>>;
+                              TensorBasis<Dim, CoxDeBoorAxis<4>>, TensorBasis<Dim, DualDomainAxis>,
+                              TensorBasis<Dim, MaxEntAxis>>;
 
 /// The basis of a grid; DDMPM's axes also carry the force sub-points per particle (algorithm.ddmpm_subpoints).
 template <int Dim>

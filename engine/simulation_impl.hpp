@@ -214,6 +214,8 @@ AnyBasis<Dim> make_basis(const GridSpec& grid, int ddmpm_subpoints) {
     else return AnyBasis<Dim>(TensorBasis<Dim, Axis>{{axis_of(0), axis_of(1)}, functions});
   };
   auto knots = [&](int d) { return KnotVector::open_uniform(p, grid.cells[d], grid.length[d]); };
+  if (grid.basis == Basis::maxent)
+    return build([&](int d) { return MaxEntAxis(grid.cells[d], grid.length[d], grid.maxent_dmax); });
   if (grid.basis == Basis::ddmpm)
     return build([&](int d) { return DualDomainAxis(grid.cells[d], grid.length[d], ddmpm_subpoints); });
   if (grid.path == BasisPath::fast && p <= 2) {

@@ -123,6 +123,18 @@ struct CoxDeBoorAxis {
   }
 };
 
+/// The cell of x on a uniform grid of `cells` cells (clamped to the grid) and the local coordinate ξ of x in it.
+struct UniformCell {
+  int cell;
+  double xi;
+};
+[[gnu::always_inline]] inline UniformCell uniform_cell(double x, double inv_h, int cells) {
+  // floor(s) without the libm call (s ≤ 0, and NaN, give cell 0)
+  const double s = x * inv_h;
+  const int c = s > 0.0 ? std::min(static_cast<int>(std::min(s, double(cells))), cells - 1) : 0;
+  return {c, s - c};
+}
+
 namespace detail {
 
 /// Coefficient table of UniformAxis<S>, [span class][power a, b, c][function] (see there).
@@ -166,10 +178,8 @@ struct UniformAxis {
     int span_class;
   };
   [[gnu::always_inline]] Location locate(double x) const {
-    // floor(s) without the libm call (s ≤ 0, and NaN, give cell 0)
-    const double s = x * inv_h;
-    const int c = s > 0.0 ? std::min(static_cast<int>(std::min(s, double(cells))), cells - 1) : 0;
-    return {c, s - c, span_class(c)};
+    const UniformCell at = uniform_cell(x, inv_h, cells);
+    return {at.cell, at.xi, span_class(at.cell)};
   }
   /// Which row of `coefficients` cell c uses: the open knot vector's end cells differ from the interior ones.
   [[gnu::always_inline]] int span_class(int c) const { return S == 3 ? (c == 0) + 2 * (c == cells - 1) : 0; }

@@ -29,9 +29,7 @@ struct DualDomainAxis {
       : inv_h(cells_ / length), cells(cells_), subpoints(subpoints_) {}
 
   AxisWeights<4> operator()(double x) const {
-    const double s = x * inv_h;
-    const int c = s > 0.0 ? std::min(static_cast<int>(std::min(s, double(cells))), cells - 1) : 0;
-    const double xi = s - c;
+    const auto [c, xi] = uniform_cell(x, inv_h, cells);
     AxisWeights<4> a;
     a.first = c;
     a.w[0] = 0.0;

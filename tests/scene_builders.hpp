@@ -79,6 +79,42 @@ inline BarResult run_bar(int cells, const std::string& basis, const std::string&
   return {sim.errors(), sim.conservation(), end_error};
 }
 
+/// The fixed-ends bar of thesis §4.6.1: E = 4 kPa, ρ = 1, v0 = 0.6, T = 1e-3 s, dt = 1e-5, 12 particles per cell.
+inline nlohmann::json otm_bar(int cells, const std::string& basis, const std::string& mapping = "direct") {
+  return {{"dimension", 1},
+          {"problem", {{"name", "vibrating-bar"}, {"v0", 0.6}}},
+          {"grid", {{"length", {1.0}}, {"cells", {cells}}, {"basis", basis}}},
+          {"particles", {{"per_cell", {12}}}},
+          {"material", {{"model", "linear-elastic"}, {"E", 4e3}, {"nu", 0.0}, {"density", 1.0}}},
+          {"algorithm", {{"update", "musl"}, {"mapping", mapping}}},
+          {"time", {{"dt", 1e-5}, {"end", 1e-3}}}};
+}
+
+/// The plate of thesis §4.6.3 (tools/scenes/plate-unified.json): A = 0.005, 32×32 cells, 4×4 particles per cell,
+/// dt = 1e-4, T = 3.5e-3 s.
+inline nlohmann::json plate_4_6_3(const std::string& basis) {
+  return {{"dimension", 2},
+          {"problem", {{"name", "vibrating-plate"}, {"amplitude", 0.005}}},
+          {"grid", {{"length", {1.0, 1.0}}, {"cells", {32, 32}}, {"basis", basis}}},
+          {"particles", {{"per_cell", {4, 4}}}},
+          {"material", {{"model", "neo-hookean"}, {"E", 1e7}, {"nu", 0.3}, {"density", 1000.0}}},
+          {"time", {{"dt", 1e-4}, {"end", 3.5e-3}}}};
+}
+
+/// What a run leaves for a verification test.
+struct Outcome {
+  RunErrors errors;
+  Conservation conservation;
+};
+
+/// Runs a scene to its end.
+template <int Dim>
+Outcome finished(const nlohmann::json& scene) {
+  Simulation<Dim> sim(parse_scene(scene));
+  run_to_end(sim);
+  return {sim.errors(), sim.conservation()};
+}
+
 /// Observed order of convergence between two resolutions (cell size halved: ratio 2).
 inline double order(double coarse_error, double fine_error, double ratio = 2.0) {
   return std::log(coarse_error / fine_error) / std::log(ratio);

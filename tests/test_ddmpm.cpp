@@ -10,33 +10,6 @@
 using namespace mpm;
 using namespace mpm::test;
 
-namespace {
-
-/// The fixed-ends bar of thesis §4.6.1: E = 4 kPa, ρ = 1, v0 = 0.6, T = 1e-3 s, dt = 1e-5, 12 particles per cell.
-nlohmann::json otm_bar(int cells, const std::string& basis, const std::string& mapping = "direct") {
-  return {{"dimension", 1},
-          {"problem", {{"name", "vibrating-bar"}, {"v0", 0.6}}},
-          {"grid", {{"length", {1.0}}, {"cells", {cells}}, {"basis", basis}}},
-          {"particles", {{"per_cell", {12}}}},
-          {"material", {{"model", "linear-elastic"}, {"E", 4e3}, {"nu", 0.0}, {"density", 1.0}}},
-          {"algorithm", {{"update", "musl"}, {"mapping", mapping}}},
-          {"time", {{"dt", 1e-5}, {"end", 1e-3}}}};
-}
-
-struct Outcome {
-  RunErrors errors;
-  Conservation conservation;
-};
-
-template <int Dim>
-Outcome finished(const nlohmann::json& scene) {
-  Simulation<Dim> sim(parse_scene(scene));
-  run_to_end(sim);
-  return {sim.errors(), sim.conservation()};
-}
-
-}  // namespace
-
 TEST_CASE("DDMPM - fixed-ends bar of thesis 4.6.1: displacement order >= 1.5 from 16 to 64 cells, conservative",
           "[verification][ddmpm][bar]") {
   // Measured u: 2.72e-6 -> 6.81e-7 -> 1.70e-7 (order 2.0), sigma 8.9e-2 -> 3.8e-2 -> 1.8e-2 (MPM-P1: 0.30 -> 0.15
@@ -116,15 +89,7 @@ TEST_CASE("DDMPM: 1-thread and 2-thread runs are bitwise identical", "[ddmpm][pa
 TEST_CASE("DDMPM on the plate of thesis 4.6.3 (A = 0.005, 32x32 cells, 4x4 particles) beats MPM-P1's stress",
           "[verification][ddmpm][plate]") {
   // Measured sigma RMS: DDMPM 5.7e3 Pa, MPM-P1 3.9e4 Pa, BSMPM 3.0e3 Pa (tools/scenes/plate-unified.json).
-  auto plate = [](const char* basis) {
-    return nlohmann::json{{"dimension", 2},
-                          {"problem", {{"name", "vibrating-plate"}, {"amplitude", 0.005}}},
-                          {"grid", {{"length", {1.0, 1.0}}, {"cells", {32, 32}}, {"basis", basis}}},
-                          {"particles", {{"per_cell", {4, 4}}}},
-                          {"material", {{"model", "neo-hookean"}, {"E", 1e7}, {"nu", 0.3}, {"density", 1000.0}}},
-                          {"time", {{"dt", 1e-4}, {"end", 3.5e-3}}}};
-  };
-  const auto ddmpm = finished<2>(plate("ddmpm")), p1 = finished<2>(plate("linear"));
+  const auto ddmpm = finished<2>(plate_4_6_3("ddmpm")), p1 = finished<2>(plate_4_6_3("linear"));
   INFO("sigma RMS: DDMPM " << ddmpm.errors.stress_rms << ", MPM-P1 " << p1.errors.stress_rms);
   CHECK(ddmpm.errors.stress_rms < 0.5 * p1.errors.stress_rms);
   CHECK(ddmpm.conservation.mass_rel_max <= 1e-13);
