@@ -39,6 +39,9 @@ study plate-bsmpm tools/scenes/plate-paper.json --set time.end=0.0125 --vary "$P
   --vary algorithm.mapping=direct,tls
 # MLS: its own study, so that the cross product does not run MPM with MLS
 study plate-mls tools/scenes/plate-paper.json --set time.end=0.0125 --set algorithm.mapping=mls --vary "$PLATE_CELLS"
+# thesis §4.6.1, Fig 4.7 and Table 4.1: the fixed-ends bar (E = 4 kPa, 12 particles per cell), 8-512 cells
+study bar-otm tools/scenes/bar-otm.json --repeat 3 --vary 'grid.cells=[8],[16],[32],[64],[128],[256],[511]' \
+  --vary grid.basis=linear,ddmpm,maxent,bspline2
 # thesis Fig 5.9 and Table 5.3: bar without grid crossing (Table 5.2), 5-40 cells, 12 particles per cell
 study bar-mpm tools/scenes/bar.json --repeat 5 --set grid.basis=linear --vary 'grid.cells=[5],[10],[20],[40]' \
   --vary algorithm.mapping=direct,cubic-spline,tls
@@ -47,11 +50,11 @@ study bar-ddmpm tools/scenes/bar.json --repeat 5 --set grid.basis=ddmpm --vary '
 study bar-bsmpm tools/scenes/bar.json --repeat 5 --vary 'grid.cells=[5],[10],[20],[40]' \
   --vary algorithm.mapping=direct,cubic-spline,tls
 # thesis Figs 5.12-5.13 and Table 5.5: large-deformation bar (Table 5.4), 20 cells, 8 particles per cell
-study bar-large tools/scenes/bar-large.json --vary 'grid.cells=[20],[40],[80]' --vary grid.basis=linear,ddmpm,bspline2 \
+study bar-large tools/scenes/bar-large.json --vary 'grid.cells=[20],[40],[80]' --vary grid.basis=linear,ddmpm,maxent,bspline2 \
   --vary algorithm.mapping=direct,cubic-spline,tls
 # thesis Fig 5.14 and Table 5.7: column compaction (Table 5.6), 50 cells, 20 particles per cell
 study column tools/scenes/column-compaction.json --vary 'grid.cells=[25],[50],[100]' \
-  --vary grid.basis=linear,ddmpm,bspline2 --vary algorithm.mapping=direct,cubic-spline,tls
+  --vary grid.basis=linear,ddmpm,maxent,bspline2 --vary algorithm.mapping=direct,cubic-spline,tls
 # thesis Table 5.8: DDMPM with sub-points on the column, beside DDMPM-TLS (50 cells, 20 particles per cell)
 study column-subpoints tools/scenes/column-compaction.json --repeat 3 --set grid.basis=ddmpm \
   --set algorithm.mapping=direct --vary 'grid.cells=[50]' --vary algorithm.ddmpm_subpoints=1,2,4,8,16,32,64,128

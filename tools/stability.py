@@ -9,7 +9,7 @@ why it failed, the maximum energy drift, the conservation errors, the reconstruc
     python3 tools/stability.py --family critical    # one family only (the page then holds only that family)
     python3 tools/stability.py --list               # the cases and the exact command of each run
 
-Methods (columns): MPM-P1 = grid.basis=linear + direct mapping; DDMPM / DDMPM-TLS = grid.basis=ddmpm + direct / tls;
+Methods (columns): MPM-P1 = grid.basis=linear + direct mapping; DDMPM / MPM-maxent = grid.basis=ddmpm / maxent + direct;
 BSMPM = bspline2 + direct; BSMPM-MLS / BSMPM-TLS = bspline2 + algorithm.mapping=mls / tls; each with
 algorithm.update=usl and musl. A run the engine refuses because the
 method is not built yet (exit 2, "only direct ...") is "n/a"; it starts counting once the engine accepts it.
@@ -47,7 +47,7 @@ DRIFT_WARN = 0.1  # energy drift that flags a completed run of a case without ex
 METHODS = [  # (label, overrides)
     ("MPM-P1", ["grid.basis=linear", "algorithm.mapping=direct"]),
     ("DDMPM", ["grid.basis=ddmpm", "algorithm.mapping=direct"]),
-    ("DDMPM-TLS", ["grid.basis=ddmpm", "algorithm.mapping=tls"]),
+    ("MPM-maxent", ["grid.basis=maxent", "algorithm.mapping=direct"]),
     ("BSMPM", ["grid.basis=bspline2", "algorithm.mapping=direct"]),
     ("BSMPM-MLS", ["grid.basis=bspline2", "algorithm.mapping=mls"]),
     ("BSMPM-TLS", ["grid.basis=bspline2", "algorithm.mapping=tls"]),
@@ -505,8 +505,8 @@ def render(fams: list[Family], runs: list[Run], argv: list[str], mpm: str, total
         f"with `--threads 1`; engine `{os.path.relpath(mpm, ROOT) if os.path.isabs(mpm) else mpm}`; "
         f"{len({r.key for r in runs})} distinct runs in {total_s / 60:.1f} min.",
         "",
-        "Columns: **MPM-P1** = `grid.basis=linear`, direct mapping; **DDMPM / DDMPM-TLS** = `grid.basis=ddmpm`, "
-        "direct / `algorithm.mapping=tls`; **BSMPM** = `grid.basis=bspline2`, direct; "
+        "Columns: **MPM-P1** = `grid.basis=linear`, direct mapping; **DDMPM / MPM-maxent** = `grid.basis=ddmpm / "
+        "maxent`, direct; **BSMPM** = `grid.basis=bspline2`, direct; "
         "**BSMPM-MLS / BSMPM-TLS** = bspline2 with `algorithm.mapping=mls / tls`; each with `algorithm.update=usl` "
         "and `musl`; lumped mass. Each run is `mpm run tools/scenes/stability/SCENE --set <method> "
         "--set algorithm.update=<scheme> --set <case> --threads 1 --summary S.json` (`--list` prints every command).",
