@@ -135,13 +135,15 @@ std::vector<std::string> read_strings(hid_t obj, const std::string& name, const 
 
 // Columns compress well with shuffle + deflate(1) (exponent bytes are alike), at little CPU cost. A zero-size
 // dataset cannot be chunked (a chunk dimension must be >= 1 and <= a fixed size), so empty columns stay contiguous.
-void write_column(hid_t group, const ColumnView& c, const std::string& file) {
-  const hsize_t n = c.values.size();
-  Handle space = own(H5Screate_simple(1, &n, nullptr), H5Sclose, file, "H5Screate_simple");
+// With `components` > 1 the dataset is (n, components), row-major: a vector or tensor per particle.
+void write_column(hid_t group, const ColumnView& c, const std::string& file, hsize_t components = 1) {
+  const hsize_t dims[2] = {c.values.size() / components, components}, n = dims[0];
+  const int rank = components > 1 ? 2 : 1;
+  Handle space = own(H5Screate_simple(rank, dims, nullptr), H5Sclose, file, "H5Screate_simple");
   Handle dcpl = own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, file, "H5Pcreate");
   if (n > 0) {
-    const hsize_t chunk = std::min(n, kMaxChunk);
-    check(H5Pset_chunk(dcpl.get(), 1, &chunk), file, "H5Pset_chunk");
+    const hsize_t chunk[2] = {std::max<hsize_t>(1, std::min(n, kMaxChunk / components)), components};
+    check(H5Pset_chunk(dcpl.get(), rank, chunk), file, "H5Pset_chunk");
     check(H5Pset_shuffle(dcpl.get()), file, "H5Pset_shuffle");
     check(H5Pset_deflate(dcpl.get(), 1), file, "H5Pset_deflate");
   }
@@ -253,6 +255,69 @@ std::string data_item(const std::string& ref, hsize_t n, hsize_t total, bool int
          indent + "  " + hdf + indent + "</DataItem>\n";
 }
 
+/// One snapshot's particle columns as ParaView wants them, written beside the snapshot into /xdmf/<step>/:
+/// positions as one (n, 3) geometry, velocity and displacement as 3-vectors, stress and F as 3×3 tensors
+/// (row-major; a 2D run's out-of-plane entries are 0, F_zz = 1, and a 1D run's F_yy = 1). ParaView 5.11's default
+/// reader (Xdmf3ReaderS) crashes on a geometry of separate X and Y items and skips XDMF Function items, so these
+/// are stored datasets; the snapshot keeps one dataset per component for h5py. The other columns are scalars.
+class ParaViewFields {
+ public:
+  /// Reads the snapshot group's columns and writes the combined datasets into `out` (unless already there).
+  ParaViewFields(hid_t snapshot, hid_t out, std::vector<std::string> columns, hsize_t n, const std::string& file)
+      : columns_(std::move(columns)), n_(n) {
+    auto column = [&](const std::string& c) {
+      if (!has(c)) return std::vector<double>(n_, c == "1" ? 1.0 : 0.0);
+      Handle ds = own(H5Dopen2(snapshot, c.c_str(), H5P_DEFAULT), H5Dclose, file, "H5Dopen2('" + c + "')");
+      return read_all(ds.get(), file, c);
+    };
+    // each combined field: its components' columns, and for the displacement the reference columns to subtract
+    auto combine = [&](const std::string& name, const std::vector<std::string>& parts,
+                       const std::vector<std::string>& minus = {}) {
+      fields_.push_back({name, parts.size()});
+      if (exists(out, name, file)) return;
+      std::vector<double> joined(n_ * parts.size());
+      for (std::size_t k = 0; k < parts.size(); ++k) {
+        const auto a = column(parts[k]);
+        const auto b = k < minus.size() ? column(minus[k]) : std::vector<double>(n_, 0.0);
+        for (hsize_t p = 0; p < n_; ++p) joined[p * parts.size() + k] = a[p] - b[p];
+      }
+      write_column(out, {name, joined}, file, parts.size());
+    };
+    combine("geometry", {"x0", "x1", "x2"});
+    if (has("v0")) combine("velocity", {"v0", "v1", "v2"});
+    if (has("X0")) combine("displacement", {"x0", "x1", "x2"}, {"X0", "X1", "X2"});
+    if (has("s00")) combine("stress", {"s00", "s01", "", "s01", "s11", "", "", "", ""});
+    if (has("F00")) combine("F", {"F00", "F01", "", "F10", has("F11") ? "F11" : "1", "", "", "", "1"});
+  }
+
+  /// The XDMF of the geometry and the attributes; `snapshot` and `combined` are the two groups as references.
+  std::string xml(const std::string& snapshot, const std::string& combined) const {
+    const std::string in = "          ";
+    auto item = [&](const std::string& ref, std::size_t k) {
+      return in + "<DataItem Dimensions=\"" + std::to_string(n_) + (k > 1 ? " " + std::to_string(k) : "") +
+             "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" + xml_escape(ref) + "</DataItem>\n";
+    };
+    std::string out = "        <Geometry GeometryType=\"XYZ\">\n" + item(combined + "geometry", 3) + "        </Geometry>\n";
+    auto attribute = [&](const std::string& name, const char* type, const std::string& data) {
+      out += "        <Attribute Name=\"" + xml_escape(name) + "\" AttributeType=\"" + type + "\" Center=\"Node\">\n" +
+             data + "        </Attribute>\n";
+    };
+    for (const auto& [name, k] : fields_)
+      if (name != "geometry") attribute(name, k == 3 ? "Vector" : "Tensor", item(combined + name, k));
+    static const std::set<std::string> combined_columns = {"x0", "x1", "v0", "v1", "s00", "s01", "s11",
+                                                           "F00", "F01", "F10", "F11"};
+    for (const auto& c : columns_)
+      if (!combined_columns.count(c)) attribute(c, "Scalar", item(snapshot + c, 1));
+    return out;
+  }
+
+ private:
+  bool has(const std::string& c) const { return std::find(columns_.begin(), columns_.end(), c) != columns_.end(); }
+  std::vector<std::string> columns_;
+  hsize_t n_;
+  std::vector<std::pair<std::string, std::size_t>> fields_;  // name, components
+};
+
 void write_text_atomically(const std::string& path, const std::string& text) {
   const std::string tmp = path + ".partial";
   {
@@ -336,16 +401,11 @@ struct H5Writer::State {
     return 0;
   }
 
-  // Polyvertex cells need connectivity (ParaView counts cells from it), and a 1D run needs a second coordinate;
-  // both are shared by all snapshots and written once: /xdmf/ids = 0..n-1 and /xdmf/zeros (never written, so it
-  // is all fill value and costs nothing).
-  std::pair<hsize_t, hsize_t> write_xdmf_helpers(hsize_t n) {
-    Handle group = exists(file.get(), "/xdmf", partial) ? own(H5Gopen2(file.get(), "/xdmf", H5P_DEFAULT), H5Gclose,
-                                                              partial, "H5Gopen2('/xdmf')")
-                                                        : create_group(file.get(), "/xdmf", partial);
-    Handle ids, zeros;
-    const hsize_t zeros_size = std::max(n, grow_helper(group.get(), "zeros", H5T_IEEE_F64LE, n, zeros));
-    const hsize_t ids_old = grow_helper(group.get(), "ids", H5T_STD_I64LE, n, ids);
+  // Polyvertex cells need connectivity (ParaView counts cells from it), shared by all snapshots and written once:
+  // /xdmf/ids = 0..n-1 in `group` (/xdmf). Returns its size.
+  hsize_t write_xdmf_ids(hid_t group, hsize_t n) {
+    Handle ids;
+    const hsize_t ids_old = grow_helper(group, "ids", H5T_STD_I64LE, n, ids);
     std::vector<long long> block;
     for (hsize_t start = ids_old; start < n; start += kMaxChunk) {
       const hsize_t count = std::min(kMaxChunk, n - start);
@@ -358,7 +418,7 @@ struct H5Writer::State {
       check(H5Dwrite(ids.get(), H5T_NATIVE_LLONG, mspace.get(), fspace.get(), H5P_DEFAULT, block.data()), partial,
             "H5Dwrite('/xdmf/ids')");
     }
-    return {std::max(n, ids_old), zeros_size};  // their sizes (a continued run may have had more particles)
+    return std::max(n, ids_old);  // a continued run may have had more particles
   }
 
   // The sidecar is built from what the file holds (not from what this writer wrote), so it also covers
@@ -385,11 +445,13 @@ struct H5Writer::State {
       max_n = std::max(max_n, grid.n);
       grids.push_back(std::move(grid));
     }
-    const auto [ids_size, zeros_size] = max_n > 0 ? write_xdmf_helpers(max_n) : std::pair<hsize_t, hsize_t>{0, 0};
+    Handle xdmf = exists(file.get(), "/xdmf", partial)
+                      ? own(H5Gopen2(file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('/xdmf')")
+                      : create_group(file.get(), "/xdmf", partial);
+    const hsize_t ids_size = max_n > 0 ? write_xdmf_ids(xdmf.get(), max_n) : 0;
 
     // Relative reference by the final name, so the pair of files can be moved together.
     const std::string h5 = fs::path(path).filename().string() + ":";
-    const int ncoord = dimension == 3 ? 3 : 2;  // ParaView needs at least X_Y
     std::ostringstream x;
     x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
       << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
@@ -398,27 +460,18 @@ struct H5Writer::State {
         x << "      <!-- snapshot " << g.name << " at t = " << shortest(g.time) << " has no particles -->\n";
         continue;
       }
-      const std::string base = h5 + "/snapshots/" + g.name + "/", in = "          ";
+      const std::string in = "          ";
       x << "      <Grid Name=\"" << g.name << "\" GridType=\"Uniform\">\n"
         << "        <Time Value=\"" << shortest(g.time) << "\"/>\n";
       x << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << g.n << "\" NodesPerElement=\"1\">\n"
-        << data_item(h5 + "/xdmf/ids", g.n, ids_size, true, in) << "        </Topology>\n"
-        << "        <Geometry GeometryType=\"" << (ncoord == 3 ? "X_Y_Z" : "X_Y") << "\">\n";
-      std::set<std::string> coords;
-      for (int i = 0; i < ncoord; ++i) {
-        std::string c = "x";  // appended, not `"x" + to_string(i)`: that form trips GCC 12's false -Wrestrict
-        c += std::to_string(i);
-        const bool have = std::find(g.columns.begin(), g.columns.end(), c) != g.columns.end();
-        x << (have ? data_item(base + c, g.n, g.n, false, in)
-                   : data_item(h5 + "/xdmf/zeros", g.n, zeros_size, false, in));
-        coords.insert(c);
-      }
-      x << "        </Geometry>\n";
-      for (const auto& c : g.columns) {
-        if (coords.count(c)) continue;
-        x << "        <Attribute Name=\"" << xml_escape(c) << "\" AttributeType=\"Scalar\" Center=\"Node\">\n"
-          << data_item(base + c, g.n, g.n, false, in) << "        </Attribute>\n";
-      }
+        << data_item(h5 + "/xdmf/ids", g.n, ids_size, true, in) << "        </Topology>\n";
+      Handle snapshot = own(H5Gopen2(snaps.get(), g.name.c_str(), H5P_DEFAULT), H5Gclose, partial, "H5Gopen2");
+      const std::string combined_path = "/xdmf/" + g.name;
+      Handle combined = exists(xdmf.get(), g.name, partial)
+                            ? own(H5Gopen2(xdmf.get(), g.name.c_str(), H5P_DEFAULT), H5Gclose, partial, "H5Gopen2")
+                            : create_group(xdmf.get(), g.name, partial);
+      const ParaViewFields fields(snapshot.get(), combined.get(), g.columns, g.n, partial);
+      x << fields.xml(h5 + "/snapshots/" + g.name + "/", h5 + combined_path + "/");
       x << "      </Grid>\n";
     }
     x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
@@ -575,10 +628,19 @@ void H5Writer::discard_after(long step, double time) {
   State& s = live("discard_after");
   s.flush_metrics();
   Handle snaps = own(H5Gopen2(s.file.get(), "/snapshots", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/snapshots')");
-  for (const auto& name : link_names(snaps.get(), s.partial)) {
-    long long n = -1;
-    std::from_chars(name.data(), name.data() + name.size(), n);
-    if (n > step) check(H5Ldelete(snaps.get(), name.c_str(), H5P_DEFAULT), s.partial, "H5Ldelete('" + name + "')");
+  // the snapshots after `step`, and their ParaView datasets (/xdmf/<step>, ParaViewFields)
+  auto drop_after = [&](hid_t group) {
+    for (const auto& name : link_names(group, s.partial)) {
+      long long n = -1;
+      const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), n);
+      if (ec == std::errc() && end == name.data() + name.size() && n > step)
+        check(H5Ldelete(group, name.c_str(), H5P_DEFAULT), s.partial, "H5Ldelete('" + name + "')");
+    }
+  };
+  drop_after(snaps.get());
+  if (exists(s.file.get(), "/xdmf", s.partial)) {
+    Handle xdmf = own(H5Gopen2(s.file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/xdmf')");
+    drop_after(xdmf.get());
   }
   const auto t = std::find(s.metric_names.begin(), s.metric_names.end(), "t");
   if (!s.metrics.valid() || t == s.metric_names.end()) return;

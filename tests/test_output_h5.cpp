@@ -155,11 +155,11 @@ TEST_CASE("H5Writer writes a run file that reads back bitwise by name", "[output
     // XDMF readers fail on a grid without points, so the empty snapshot is only named in a comment
     CHECK(x.find("<!-- snapshot 000010 at t = 0.1 has no particles -->") != std::string::npos);
     CHECK(x.find("<Time Value=\"12.5\"/>") != std::string::npos);
-    CHECK(x.find(">run.h5:/snapshots/000000/x0<") != std::string::npos);
-    CHECK(x.find(">run.h5:/snapshots/000000/x1<") != std::string::npos);
-    CHECK(x.find(">run.h5:/snapshots/1234567/x1<") != std::string::npos);
-    CHECK(x.find("<Attribute Name=\"v0\"") != std::string::npos);
-    CHECK(x.find("GeometryType=\"X_Y\"") != std::string::npos);
+    // one (n, 3) geometry and 3-vectors, written beside the snapshot (ParaView's default reader needs both)
+    CHECK(x.find(">run.h5:/xdmf/000000/geometry<") != std::string::npos);
+    CHECK(x.find(">run.h5:/xdmf/1234567/geometry<") != std::string::npos);
+    CHECK(x.find("<Attribute Name=\"velocity\" AttributeType=\"Vector\"") != std::string::npos);
+    CHECK(x.find("GeometryType=\"XYZ\"") != std::string::npos);
     CHECK(x.find("TopologyType=\"Polyvertex\" NumberOfElements=\"5\"") != std::string::npos);
     CHECK(x.find("ItemType=\"HyperSlab\"") != std::string::npos);  // 2 of the 5 connectivity ids
     CHECK(x.find(tmp.dir.string()) == std::string::npos);
@@ -185,11 +185,12 @@ TEST_CASE("A 1D writer destroyed without close() still produces the final file",
   CHECK_FALSE(fs::exists(path + ".partial"));
   CHECK(same_bits(mpm::read_dataset(path, "/metrics"), {0.0, 1.5, 0.5, 1.25}));
   CHECK(same_bits(mpm::read_dataset(path, "/snapshots/000003/v0"), v0));
-  CHECK(mpm::read_dataset(path, "/xdmf/zeros") == std::vector<double>{0, 0, 0});
+  // the (n, 3) geometry and velocity of a 1D run, zero-padded
+  CHECK(mpm::read_dataset(path, "/xdmf/000003/geometry") == std::vector<double>{0.25, 0, 0, 0.5, 0, 0, 0.75, 0, 0});
+  CHECK(same_bits(mpm::read_dataset(path, "/xdmf/000003/velocity"), {0.1, 0, 0, -0.2, 0, 0, 0.3, 0, 0}));
   const std::string x = slurp(tmp.file("bar.xdmf"));
-  CHECK(x.find(">bar.h5:/snapshots/000003/x0<") != std::string::npos);
-  CHECK(x.find(">bar.h5:/xdmf/zeros<") != std::string::npos);  // the y coordinate ParaView needs
-  CHECK(x.find("<Attribute Name=\"v0\"") != std::string::npos);
+  CHECK(x.find(">bar.h5:/xdmf/000003/geometry<") != std::string::npos);
+  CHECK(x.find("<Attribute Name=\"velocity\" AttributeType=\"Vector\"") != std::string::npos);
 }
 
 TEST_CASE("append() continues a run after its checkpoint", "[output]") {
@@ -225,6 +226,8 @@ TEST_CASE("append() continues a run after its checkpoint", "[output]") {
   CHECK(same_bits(mpm::read_dataset(path, "/metrics"), {0.0, 1.0, 0.1, 1.0, 0.2, 2.0}));
   CHECK(mpm::list_snapshots(path) == std::vector<std::string>{"000000", "000010", "000020"});
   CHECK(same_bits(mpm::read_dataset(path, "/snapshots/000020/x0"), c_new));
+  // the ParaView geometry of the replaced snapshot is the new one, not the discarded run's
+  CHECK(same_bits(mpm::read_dataset(path, "/xdmf/000020/geometry"), {7, 0, 0, 8, 0, 0}));
   const std::string x = slurp(tmp.file("resume.xdmf"));
   CHECK(count(x, "<Time Value=") == 3);
   // the connectivity helper kept its 5 ids from the first run; the 2-particle grids take a slab of it

@@ -9,6 +9,7 @@ packages=(
   catch2 libbenchmark-dev nlohmann-json3-dev libcli11-dev
   python3 python3-matplotlib python3-h5py python3-numpy
   clang-14 libclang-rt-14-dev llvm-14  # tools/sanitize.sh: the sanitizer builds, libFuzzer (clang only), llvm-symbolizer
+  paraview python3-paraview xvfb xauth  # tests/cli/check_paraview.sh: ParaView's own reader opens the output
 )
 
 missing=()
