@@ -53,9 +53,7 @@ inline void scatter_gauss(const TensorBasis<Dim, Axis>& basis, GaussView<Dim> gp
   };
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ig = order[k];
-    double xg[Dim];
-    for (int d = 0; d < Dim; ++d) xg[d] = gp.x[d][ig];
-    auto st = stencil_at<Dim, S>(basis, xg);
+    auto st = stencil_of<Dim, S>(basis, gp.x, ig);
     if (st.first0 != first0 || st.first1 != first1) {  // another cell: the buffer goes to the grid
       flush();
       first0 = st.first0;

@@ -124,9 +124,7 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
   MomentumTotals<Dim> totals;
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
-    double xp[Dim];
-    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
-    const auto st = stencil_at<Dim, S>(basis, xp);
+    const auto st = stencil_of<Dim, S>(basis, p.x, ip);
     const double mp = p.m[ip];
     double mv[Dim] = {};
     if constexpr (Fields.momentum) {
@@ -164,9 +162,7 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
   MomentumTotals<Dim> totals;
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
-    double xp[Dim];
-    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
-    const auto st = stencil_at<Dim, S>(basis, xp);
+    const auto st = stencil_of<Dim, S>(basis, p.x, ip);
     RowVector<S> a_y[Dim] = {};  // Σ_j wy_j a_ij, then contracted with wx (as in gather_g2p)
     for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
       for (int d = 0; d < Dim; ++d) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
@@ -199,9 +195,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
   for (std::size_t first = begin; first < end; first += batch) {
     const std::size_t last = std::min(end, first + batch);
     for (std::size_t ip = first; ip < last; ++ip) {
-      double xp[Dim];
-      for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
-      const auto st = stencil_at<Dim, S>(basis, xp);
+      const auto st = stencil_of<Dim, S>(basis, p.x, ip);
       // φ_i = wx_i wy_j: contract the rows along axis 1 first (a_y = Σ_j wy_j a_ij, and with dwy_j for ∂₁), then
       // along axis 0 with wx or dwx; ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
       RowVector<S> a_y[Dim] = {}, v_y[Dim] = {}, v_dy[Dim] = {};
@@ -264,9 +258,7 @@ inline void apply_consistent_mass(const TensorBasis<Dim, Axis>& basis, ParticleV
                                   const unsigned* order, std::size_t begin, std::size_t end) {
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
-    double xp[Dim];
-    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
-    const auto st = stencil_at<Dim, S>(basis, xp);
+    const auto st = stencil_of<Dim, S>(basis, p.x, ip);
     RowVector<S> x_y[Dim] = {};  // Σ_j wy_j x_ij, then contracted with wx (as in gather_g2p)
     for_each_row(st, stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
       for (int d = 0; d < Dim; ++d) x_y[d] += wy * load_row<RowVector<S>>(x[d] + row);
