@@ -63,14 +63,6 @@ class CubicSplineReconstruction {
     }
   }
 
-  /// Only the velocities changed: the splines are fitted as usual.
-  template <class Body>
-  MomentumTotals<Dim> rebuild_momentum(GaussPointStore<Dim>& gp, const ParticleView<Dim>& p,
-                                       const CellBins<Dim>& cells, const CellBins<Dim>& layout, const Body& body,
-                                       FallbackCounts& fallbacks) {
-    return rebuild(gp, p, cells, layout, body, false, true, fallbacks);
-  }
-
  private:
   /// The particles of the `ncells` cells in order of position (1D), into sorted_; their totals Σ m_p v_p, Σ m_p |v_p|.
   MomentumTotals<Dim> sort_by_position(const ParticleView<Dim>& p, const CellBins<Dim>& cells, std::size_t ncells) {

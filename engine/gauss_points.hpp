@@ -45,13 +45,18 @@ class GaussPoints {
   }
 
   /// The momentum again after a rebuild, when the particles' velocities are all that changed since (the second
-  /// P2G of MUSL: positions, J and masses as in that rebuild): the same numbers as rebuild(…, false, true); TLS
-  /// reuses the rebuild's density and normal matrices (TlsReconstruction::rebuild_momentum).
+  /// P2G of MUSL: positions, J and masses as in that rebuild): the same numbers as rebuild(…, false, true). A method
+  /// that can reuse the rebuild's work has a rebuild_momentum of its own (TLS: the density and normal matrices).
   template <class Body>
   MomentumTotals<Dim> rebuild_momentum(const ParticleView<Dim>& p, const CellBins<Dim>& particles_by_cell,
                                        const CellBins<Dim>& layout, const Body& body) {
     return std::visit(
-        [&](auto& method) { return method.rebuild_momentum(store_, p, particles_by_cell, layout, body, fallbacks_); },
+        [&](auto& method) {
+          if constexpr (requires { method.rebuild_momentum(store_, p, particles_by_cell, layout, body, fallbacks_); })
+            return method.rebuild_momentum(store_, p, particles_by_cell, layout, body, fallbacks_);
+          else
+            return method.rebuild(store_, p, particles_by_cell, layout, body, false, true, fallbacks_);
+        },
         method_);
   }
 

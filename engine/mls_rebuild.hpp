@@ -74,14 +74,6 @@ class MlsReconstruction {
     return sum_totals(totals);
   }
 
-  /// Only the velocities changed: MLS rebuilds ρ and ρv as usual.
-  template <class Body>
-  MomentumTotals<Dim> rebuild_momentum(GaussPointStore<Dim>& gp, const ParticleView<Dim>& p,
-                                       const CellBins<Dim>& cells, const CellBins<Dim>& layout, const Body& body,
-                                       FallbackCounts& fallbacks) {
-    return rebuild(gp, p, cells, layout, body, false, true, fallbacks);
-  }
-
  private:
   /// K fields per particle: ρ, ρv, and σ, ρb when the stress is fitted.
   template <int K, class Body>
