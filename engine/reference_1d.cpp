@@ -184,20 +184,26 @@ long count_steps(double end, double dt) {
   throw std::invalid_argument(msg.str());
 }
 
-}  // namespace
-
-Ulfem1dResult solve_ulfem_1d(const Ulfem1dSetup& s) {
+/// Refuses a set-up the solver cannot run, naming the value and what was expected.
+void check_setup(const Ulfem1dSetup& s) {
   if (!(s.length > 0)) bad_setup("length", s.length, "> 0");
   if (s.elements < 1) bad_setup("elements", s.elements, ">= 1");
   if (!(s.material.density > 0) || !(s.material.E > 0)) bad_setup("material.E or density", s.material.E, "> 0");
   if (!(s.end >= 0)) bad_setup("end", s.end, ">= 0");
-  const int ne = s.elements;
-  const double h = s.length / ne, c0 = std::sqrt(uniaxial_modulus(s.material) / s.material.density);
+  const double h = s.length / s.elements, c0 = std::sqrt(uniaxial_modulus(s.material) / s.material.density);
   if (!(s.dt > 0) || s.dt > h / c0 * (1 + 1e-12)) {
     std::ostringstream bound;
     bound << "in (0, h/c] = (0, " << h / c0 << "] (the critical step of the reference state)";
     bad_setup("dt", s.dt, bound.str());
   }
+}
+
+}  // namespace
+
+Ulfem1dResult solve_ulfem_1d(const Ulfem1dSetup& s) {
+  check_setup(s);
+  const int ne = s.elements;
+  const double h = s.length / ne;
 
   const std::size_t nn = ne + 1;
   std::vector<double> X(nn), x(nn), v(nn, 0.0), m(nn, 0.0), f(nn);

@@ -10,6 +10,7 @@
 // past the stencil: the grid reserves ghost columns for it (grid_stride) and the coloured blocks are wide enough
 // that it never belongs to a block of the same colour (cell_bins.hpp), so no scatter races on it.
 #include <array>
+#include <cstddef>
 #include <experimental/simd>
 #include <type_traits>
 
@@ -128,6 +129,14 @@ MPM_INLINE Stencil<Dim, S> stencil_at(const TensorBasis<Dim, Axis>& basis, const
     b.dw.copy_to(st.dwy, std::experimental::element_aligned);
   }
   return st;
+}
+
+/// The stencil of point i of the position columns x (one pointer per axis): the prologue of every transfer.
+template <int Dim, int S, class Axis, class Columns>
+MPM_INLINE Stencil<Dim, S> stencil_of(const TensorBasis<Dim, Axis>& basis, const Columns& x, std::size_t i) {
+  double xi[Dim];
+  for (int d = 0; d < Dim; ++d) xi[d] = x[d][i];
+  return stencil_at<Dim, S>(basis, xi);
 }
 
 /// Calls f(dof, wy, dwy) for every row of the stencil: `dof` is the row's first DOF, (wy, dwy) the axis-1 factor

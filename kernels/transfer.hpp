@@ -144,9 +144,7 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
   MomentumTotals<Dim> totals;
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
-    double xp[Dim];
-    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
-    const auto st = stencil_at<Dim, S>(basis, xp);
+    const auto st = stencil_of<Dim, S>(basis, p.x, ip);
     const double mp = p.m[ip];
     double mv[Dim] = {};
     if constexpr (Fields.momentum) {
@@ -169,7 +167,7 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
       }
       if constexpr (Dim == 1 && WithSubpoints<Axis>)
         if (basis.axis[0].subpoints > 1) {
-          scatter_subpoint_stress<S>(basis, g, xp[0], V, Vsig[0][0]);
+          scatter_subpoint_stress<S>(basis, g, p.x[0][ip], V, Vsig[0][0]);
           Vsig[0][0] = 0.0;  // the particle itself carries mass, momentum and body force only
         }
     }
@@ -189,9 +187,7 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
   MomentumTotals<Dim> totals;
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
-    double xp[Dim];
-    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
-    const auto st = stencil_at<Dim, S>(basis, xp);
+    const auto st = stencil_of<Dim, S>(basis, p.x, ip);
     RowVector<S> a_y[Dim] = {};  // Σ_j wy_j a_ij, then contracted with wx (as in gather_g2p)
     for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
       for (int d = 0; d < Dim; ++d) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
@@ -224,9 +220,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
   for (std::size_t first = begin; first < end; first += batch) {
     const std::size_t last = std::min(end, first + batch);
     for (std::size_t ip = first; ip < last; ++ip) {
-      double xp[Dim];
-      for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
-      const auto st = stencil_at<Dim, S>(basis, xp);
+      const auto st = stencil_of<Dim, S>(basis, p.x, ip);
       // φ_i = wx_i wy_j: contract the rows along axis 1 first (a_y = Σ_j wy_j a_ij, and with dwy_j for ∂₁), then
       // along axis 0 with wx or dwx; ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
       RowVector<S> a_y[Dim] = {}, v_y[Dim] = {}, v_dy[Dim] = {};
@@ -289,9 +283,7 @@ inline void apply_consistent_mass(const TensorBasis<Dim, Axis>& basis, ParticleV
                                   const unsigned* order, std::size_t begin, std::size_t end) {
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
-    double xp[Dim];
-    for (int d = 0; d < Dim; ++d) xp[d] = p.x[d][ip];
-    const auto st = stencil_at<Dim, S>(basis, xp);
+    const auto st = stencil_of<Dim, S>(basis, p.x, ip);
     RowVector<S> x_y[Dim] = {};  // Σ_j wy_j x_ij, then contracted with wx (as in gather_g2p)
     for_each_row(st, stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
       for (int d = 0; d < Dim; ++d) x_y[d] += wy * load_row<RowVector<S>>(x[d] + row);
