@@ -19,14 +19,6 @@ typename GaussPoints<Dim>::Method GaussPoints<Dim>::method_of(const Scene& scene
   }
 }
 
-template <int Dim>
-ParticleView<Dim> GaussPoints<Dim>::mass_view() {
-  ParticleView<Dim> v;
-  for (int d = 0; d < Dim; ++d) v.x[d] = store_.x[d].data();
-  v.m = store_.m.data();
-  return v;
-}
-
 template class GaussPoints<1>;
 template class GaussPoints<2>;
 

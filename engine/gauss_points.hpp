@@ -84,9 +84,9 @@ class GaussPoints {
     }
   }
 
+  /// The Gauss points and their fields; as MassCarriers, the carriers of the consistent mass
+  /// M_ij = Σ_g φ_i ρ̂ω φ_j (thesis eq. 3.9).
   GaussView<Dim> view() const { return store_.view(); }
-  /// The Gauss points as mass carriers, for the consistent-mass operator M_ij = Σ_g φ_i ρ̂ω φ_j (thesis eq. 3.9).
-  ParticleView<Dim> mass_view();
   const CellBins<Dim>& bins() const { return store_.bins; }
   const FallbackCounts& fallbacks() const { return fallbacks_; }
   /// The reconstruction's name in the pipeline's stage names ("tls", "mls", "cubic-spline").

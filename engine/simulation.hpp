@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "engine/cell_bins.hpp"
+#include "engine/consistent_mass.hpp"
 #include "engine/gauss_points.hpp"
 #include "engine/material.hpp"
 #include "engine/particle_store.hpp"
@@ -136,16 +137,14 @@ class Simulation {
   void load_state(const SimulationState& state);
 
  private:
+  template <class B, class M, class F>
+  class Step;
   /// Returns the largest distance a particle moved along an axis, in cells.
   template <class B, class M, class F>
   double step_with(const B& basis, const M& material, const F& body, double dt);
-  template <class B>
-  void solve_consistent(const B& basis, const ParticleView<Dim>& carriers, const CellBins<Dim>& bins,
-                        std::array<std::vector<double>, Dim>& x, const std::array<std::vector<double>, Dim>& rhs);
   void clear_grid(bool mass, bool momentum, bool force);
   void check_mass();
   void check_momentum(const MomentumTotals<Dim>& particles);
-  void apply_fixed(std::array<std::vector<double>, Dim>& field);
   void raise_unstable(std::size_t particle, const char* stage) const;
   /// With DDMPM sub-points: every particle shorter than two cells, so its sub-points stay within a cell of it.
   void check_subpoint_reach() const;
@@ -166,7 +165,7 @@ class Simulation {
   long step_ = 0, steps_total_ = 0;
   double moved_cells_ = std::numeric_limits<double>::infinity();  ///< bound on any particle's move since binning
   int cg_iterations_ = 0;
-  std::array<std::vector<double>, Dim> cg_r_, cg_z_, cg_p_, cg_Ap_, cg_x_;
+  std::optional<ConsistentMassSolver<Dim>> mass_solver_;  ///< projection and consistent mass only
   std::vector<MomentumTotals<Dim>> block_momentum_;
   std::optional<GaussPoints<Dim>> gauss_;      ///< reconstructed mappings only
   std::optional<CellBins<Dim>> particle_cells_;  ///< particles by single cell, for the per-cell fits

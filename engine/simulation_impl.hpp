@@ -15,6 +15,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_reduce.h>
 
+#include "engine/deterministic_sum.hpp"
 #include "engine/parallel_over.hpp"
 #include "engine/point_load.hpp"
 #include "kernels/quadrature.hpp"
@@ -29,29 +30,6 @@ constexpr int reorder_every = 16;              // steps between permutations of 
 // The particles are binned again once they may have moved this many cells since the last binning (or at a
 // reordering); the blocks are wide enough for that (CellBins::block_width_for). Binning was 8–11 % of a step.
 constexpr int bin_slack_cells = 1;
-constexpr double cg_tolerance = 1e-14;         // relative residual of the consistent-mass solves
-constexpr int cg_max_iterations = 1000;
-
-/// Deterministic parallel sum of f(i) over [0, n): fixed chunks, fixed combination order, compensated. Within a
-/// chunk four interleaved sums (i mod 4) break the dependency chain of one running sum, which had made the
-/// conservation checks latency-bound.
-template <class F>
-double deterministic_sum(std::size_t n, F&& f) {
-  constexpr std::size_t lanes = 4;
-  return tbb::parallel_deterministic_reduce(
-             tbb::blocked_range<std::size_t>(0, n, 4096), CompensatedSum{},
-             [&](const tbb::blocked_range<std::size_t>& r, CompensatedSum acc) {
-               CompensatedSum lane[lanes];
-               std::size_t i = r.begin();
-               for (; i + lanes <= r.end(); i += lanes)
-                 for (std::size_t k = 0; k < lanes; ++k) lane[k].add(f(i + k));
-               for (; i < r.end(); ++i) lane[0].add(f(i));
-               for (const auto& l : lane) acc = acc + l;
-               return acc;
-             },
-             std::plus<>())
-      .value();
-}
 
 /// Local coordinates in [0, 1) of the particles of one cell, per axis, and their volume fractions.
 struct CellLayout {
@@ -159,8 +137,9 @@ Seeds<Dim> seed_particles(const Scene& scene, const Problem<Dim>& problem) {
   return s;
 }
 
+/// The stage names of one step of the scene's scheme.
 template <int Dim>
-std::vector<std::string> assemble_pipeline(const Scene& scene, bool body_force) {
+std::vector<std::string> scheme_stages(const Scene& scene, bool body_force) {
   const bool consistent_v = scene.algorithm.mass != MassMatrix::lumped;
   const bool consistent_a = scene.algorithm.mass == MassMatrix::consistent;
   const std::string p2g_force = body_force ? "p2g-force+body-force" : "p2g-force";
@@ -177,6 +156,57 @@ std::vector<std::string> assemble_pipeline(const Scene& scene, bool body_force) 
               "g2p-velocity-position"};
   }
   return {};
+}
+
+/// The stage names of one step: the scheme's, DDMPM's force sub-points and a point load with every force
+/// scatter, and the rebuild of the reconstruction `rebuild` (null for direct mapping) before every scatter, which
+/// reads the Gauss points.
+template <int Dim>
+std::vector<std::string> assemble_pipeline(const Scene& scene, bool body_force, bool point_loads,
+                                           const char* rebuild_name) {
+  std::vector<std::string> pipeline = scheme_stages<Dim>(scene, body_force);
+  for (auto& st : pipeline)
+    if (st.rfind("p2g-force", 0) == 0) {
+      if (scene.algorithm.ddmpm_subpoints > 1) st += "+subpoints";
+      if (point_loads) st += "+point-load";
+    }
+  if (!rebuild_name) return pipeline;
+  const std::string rebuild = std::string(rebuild_name) + "-rebuild+";
+  std::vector<std::string> stages;
+  for (const auto& st : pipeline) {
+    if (st == "g2p-velocity+p2g-momentum") {
+      stages.insert(stages.end(), {"g2p-velocity", rebuild + "p2g-momentum"});
+    } else {
+      stages.push_back(st.rfind("p2g", 0) == 0 ? rebuild + st : st);
+    }
+  }
+  return stages;
+}
+
+/// The grid arrays of the scene: DOF = i0 + stride1 · i1, with ghost columns for the kernels' padding lanes
+/// (stencil.hpp), which stay empty; the fixed sides marked.
+template <int Dim>
+GridState<Dim> make_grid(const Scene& scene) {
+  GridState<Dim> grid;
+  const Basis basis = scene.grid.basis;
+  grid.stride1 = grid_stride(functions_per_axis(basis, scene.grid.cells[0]), stencil_width_of(basis));
+  grid.dofs = Dim == 1 ? grid.stride1 : grid.stride1 * functions_per_axis(basis, scene.grid.cells[Dim - 1]);
+  grid.m.assign(grid.dofs, 0.0);
+  for (int d = 0; d < Dim; ++d) {
+    for (auto* a : {&grid.q[d], &grid.f[d], &grid.v[d], &grid.a[d]}) a->assign(grid.dofs, 0.0);
+    grid.fixed[d].assign(grid.dofs, 0);
+  }
+  // fixed sides: the first or last function along the side's normal axis carries the boundary value
+  for (int side : scene.fixed_sides) {
+    const int axis = side / 2;
+    if (axis >= Dim) continue;
+    const int index = boundary_function(basis, scene.grid.cells[axis], side % 2);
+    for (int dof = 0; dof < grid.dofs; ++dof) {
+      const int along = axis == 0 ? dof % grid.stride1 : dof / grid.stride1;
+      if (along == index) grid.fixed[axis][dof] = 1;
+    }
+  }
+  return grid;
 }
 
 template <int Dim>
@@ -293,51 +323,15 @@ Simulation<Dim>::Simulation(const Scene& scene)
   steps_total_ = count_steps<Dim>(scene, dt_);
   empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
 
-  // DOF = i0 + stride1 · i1, with ghost columns for the kernels' padding lanes (stencil.hpp); they stay empty
-  const Basis basis = scene.grid.basis;
-  grid_.stride1 = grid_stride(functions_per_axis(basis, scene.grid.cells[0]), stencil_width_of(basis));
-  grid_.dofs = Dim == 1 ? grid_.stride1 : grid_.stride1 * functions_per_axis(basis, scene.grid.cells[Dim - 1]);
-  grid_.m.assign(grid_.dofs, 0.0);
-  for (int d = 0; d < Dim; ++d) {
-    for (auto* a : {&grid_.q[d], &grid_.f[d], &grid_.v[d], &grid_.a[d]}) a->assign(grid_.dofs, 0.0);
-    grid_.fixed[d].assign(grid_.dofs, 0);
-  }
-  // fixed sides: the first or last function along the side's normal axis carries the boundary value
-  for (int side : scene.fixed_sides) {
-    const int axis = side / 2;
-    if (axis >= Dim) continue;
-    const int index = boundary_function(basis, scene.grid.cells[axis], side % 2);
-    for (int dof = 0; dof < grid_.dofs; ++dof) {
-      const int along = axis == 0 ? dof % grid_.stride1 : dof / grid_.stride1;
-      if (along == index) grid_.fixed[axis][dof] = 1;
-    }
-  }
-  if (scene.algorithm.mass != MassMatrix::lumped)
-    for (int d = 0; d < Dim; ++d)
-      for (auto* a : {&cg_r_[d], &cg_z_[d], &cg_p_[d], &cg_Ap_[d], &cg_x_[d]}) a->assign(grid_.dofs, 0.0);
+  grid_ = make_grid<Dim>(scene);
+  if (scene.algorithm.mass != MassMatrix::lumped) mass_solver_.emplace(grid_.dofs);
 
   if (scene.algorithm.mapping != Mapping::direct) {
     gauss_.emplace(scene, bins_.block_width());
     particle_cells_.emplace(CellBins<Dim>::single_cells_in_order_of(bins_));
   }
-  pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force());
-  for (auto& st : pipeline_)
-    if (st.rfind("p2g-force", 0) == 0) {
-      if (scene.algorithm.ddmpm_subpoints > 1) st += "+subpoints";
-      if (problem_->has_point_loads()) st += "+point-load";
-    }
-  if (gauss_) {  // every scatter reads the Gauss points, rebuilt from the particles just before it
-    const std::string rebuild = std::string(gauss_->name()) + "-rebuild+";
-    std::vector<std::string> stages;
-    for (const auto& st : pipeline_) {
-      if (st == "g2p-velocity+p2g-momentum") {
-        stages.insert(stages.end(), {"g2p-velocity", rebuild + "p2g-momentum"});
-      } else {
-        stages.push_back(st.rfind("p2g", 0) == 0 ? rebuild + st : st);
-      }
-    }
-    pipeline_ = stages;
-  }
+  pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force(), problem_->has_point_loads(),
+                                     gauss_ ? gauss_->name() : nullptr);
   // initial stress from F = I is zero for both laws
 }
 
@@ -440,13 +434,6 @@ void Simulation<Dim>::check_momentum(const MomentumTotals<Dim>& particles) {
 }
 
 template <int Dim>
-void Simulation<Dim>::apply_fixed(std::array<std::vector<double>, Dim>& field) {
-  for (int d = 0; d < Dim; ++d)
-    for (int i = 0; i < grid_.dofs; ++i)
-      if (grid_.fixed[d][i]) field[d][i] = 0.0;
-}
-
-template <int Dim>
 void Simulation<Dim>::raise_unstable(std::size_t p, const char* stage) const {
   const auto& s = store_;
   std::ostringstream msg;
@@ -485,219 +472,192 @@ void Simulation<Dim>::check_subpoint_reach() const {
     }
 }
 
-/// Consistent-mass solve M x = rhs on the free DOFs (not fixed, not empty), per component, by conjugate gradients
-/// with the lumped mass as (Jacobi) preconditioner; M is applied matrix-free (transfer.hpp). Thesis eqs 3.9–3.10.
-template <int Dim>
-template <class B>
-void Simulation<Dim>::solve_consistent(const B& basis, const ParticleView<Dim>& pv, const CellBins<Dim>& bins,
-                                       std::array<std::vector<double>, Dim>& x,
-                                       const std::array<std::vector<double>, Dim>& rhs) {
-  constexpr int S = B::width;
-  const std::size_t n = grid_.dofs;
-  auto free_dof = [&](int d, std::size_t i) { return !grid_.fixed[d][i] && grid_.m[i] > empty_mass_; };
-  auto apply = [&](const std::array<std::vector<double>, Dim>& in, std::array<std::vector<double>, Dim>& out) {
-    std::array<const double*, Dim> xin;
-    std::array<double*, Dim> yout;
-    for (int d = 0; d < Dim; ++d) {
-      std::fill(out[d].begin(), out[d].end(), 0.0);
-      xin[d] = in[d].data();
-      yout[d] = out[d].data();
-    }
-    const unsigned* order = bins.order().data();
-    bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
-      apply_consistent_mass<Dim, S>(basis, pv, grid_.stride1, xin, yout, order, b, e);
-    });
-  };
-  // start from the lumped solution, masked
-  for (int d = 0; d < Dim; ++d)
-    for (std::size_t i = 0; i < n; ++i) x[d][i] = free_dof(d, i) ? rhs[d][i] / grid_.m[i] : 0.0;
-  apply(x, cg_Ap_);
-  std::array<double, Dim> rz{}, norm_b{};
-  std::array<bool, Dim> done{};
-  for (int d = 0; d < Dim; ++d) {
-    for (std::size_t i = 0; i < n; ++i) {
-      const bool f = free_dof(d, i);
-      cg_r_[d][i] = f ? rhs[d][i] - cg_Ap_[d][i] : 0.0;
-      cg_z_[d][i] = f ? cg_r_[d][i] / grid_.m[i] : 0.0;
-      cg_p_[d][i] = cg_z_[d][i];
-      rz[d] += cg_r_[d][i] * cg_z_[d][i];
-      norm_b[d] += f ? rhs[d][i] * rhs[d][i] : 0.0;
-    }
-    norm_b[d] = std::sqrt(norm_b[d]);
-  }
-  int it = 0;
-  for (; it < cg_max_iterations; ++it) {
-    bool all_done = true;
-    for (int d = 0; d < Dim; ++d) {
-      double rr = 0.0;
-      for (std::size_t i = 0; i < n; ++i) rr += cg_r_[d][i] * cg_r_[d][i];
-      done[d] = std::sqrt(rr) <= cg_tolerance * norm_b[d];
-      all_done = all_done && done[d];
-    }
-    if (all_done) break;
-    apply(cg_p_, cg_Ap_);
-    for (int d = 0; d < Dim; ++d) {
-      if (done[d]) continue;
-      double pAp = 0.0;
-      for (std::size_t i = 0; i < n; ++i)
-        if (free_dof(d, i)) pAp += cg_p_[d][i] * cg_Ap_[d][i];
-      const double alpha = rz[d] / pAp;
-      double rz_new = 0.0;
-      for (std::size_t i = 0; i < n; ++i) {
-        if (!free_dof(d, i)) continue;
-        x[d][i] += alpha * cg_p_[d][i];
-        cg_r_[d][i] -= alpha * cg_Ap_[d][i];
-        cg_z_[d][i] = cg_r_[d][i] / grid_.m[i];
-        rz_new += cg_r_[d][i] * cg_z_[d][i];
-      }
-      const double beta = rz_new / rz[d];
-      rz[d] = rz_new;
-      for (std::size_t i = 0; i < n; ++i) cg_p_[d][i] = free_dof(d, i) ? cg_z_[d][i] + beta * cg_p_[d][i] : 0.0;
-    }
-  }
-  cg_iterations_ += it;
-}
-
+/// One step's kernels for one basis, material and body force: the transfers and grid updates that the step
+/// sequences (usl, musl, usf) are built from.
 template <int Dim>
 template <class B, class M, class F>
-double Simulation<Dim>::step_with(const B& basis, const M& material, const F& body, double dt) {
-  constexpr int S = B::width;
-  const std::size_t np = store_.size();
-  cg_iterations_ = 0;
-  const auto pv = store_.view();
-  const auto gv = grid_.view();
-  const unsigned* order = bins_.order().data();
-  const auto stress = [&](const double* Fp, double* s) { material.template stress<Dim>(Fp, s); };
-  ParticleGuard guard;
-  for (int d = 0; d < Dim; ++d) {
-    guard.hi[d] = scene_.grid.length[d];
-    guard.inv_h[d] = scene_.grid.cells[d] / scene_.grid.length[d];
+class Simulation<Dim>::Step {
+ public:
+  static constexpr int S = B::width;
+
+  Step(Simulation& sim, const B& basis, const M& material, const F& body, double dt)
+      : sim_(sim), basis_(basis), material_(material), body_(body), dt_(dt), pv_(sim.store_.view()),
+        gv_(sim.grid_.view()), np_(sim.store_.size()) {
+    for (int d = 0; d < Dim; ++d) {
+      guard_.hi[d] = sim.scene_.grid.length[d];
+      guard_.inv_h[d] = sim.scene_.grid.cells[d] / sim.scene_.grid.length[d];
+    }
+    sim.block_momentum_.assign(sim.bins_.blocks(), MomentumTotals<Dim>{});
+    if (sim.particle_cells_) {
+      std::array<const double*, Dim> x;
+      for (int d = 0; d < Dim; ++d) x[d] = pv_.x[d];
+      sim.particle_cells_->bin(x, np_);
+    }
   }
 
-  block_momentum_.assign(bins_.blocks(), MomentumTotals<Dim>{});
-  // P2G, direct (particles as integration points) or from the Gauss points of the reconstruction, which is
-  // rebuilt from the particles first (with stress and body force when the force is scattered)
-  // (only_velocities_changed: since the last scatter, as in MUSL's second P2G; the reconstruction reuses its work)
-  auto scatter = [&]<ScatterFields Fields>(bool only_velocities_changed = false) {
-    if constexpr (Fields.force)
-      if (scene_.algorithm.ddmpm_subpoints > 1) check_subpoint_reach();
-    if (gauss_) {
-      const MomentumTotals<Dim> totals = only_velocities_changed
-                                             ? gauss_->rebuild_momentum(pv, *particle_cells_, bins_, body)
-                                             : gauss_->rebuild(pv, *particle_cells_, bins_, body, Fields.force, Fields.momentum);
-      gauss_->template scatter<Fields, F::active, S>(basis, gv);
-      if constexpr (Fields.momentum) check_momentum(totals);
-    } else {
-      bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-        const auto totals = scatter_p2g<Fields, Dim, S>(basis, pv, gv, order, b, e, body);
-        if constexpr (Fields.momentum) block_momentum_[block] = totals;
-      });
-      if constexpr (Fields.momentum) check_momentum(sum_totals(block_momentum_));
-    }
-    if constexpr (Fields.force)
-      if (problem_->has_point_loads()) add_point_loads<Dim, S>(basis, gv, problem_->point_loads(time_, pv, np));
-    if constexpr (Fields.mass) check_mass();
-  };
-  if (particle_cells_) {
-    std::array<const double*, Dim> x;
-    for (int d = 0; d < Dim; ++d) x[d] = pv.x[d];
-    particle_cells_->bin(x, np);
+  /// The largest distance a particle moved along an axis, in cells.
+  double max_move() const { return guard_.max_move_cells.load(); }
+
+  /// Thesis Algorithm 1.
+  void usl() {
+    sim_.clear_grid(true, true, true);
+    scatter<ScatterFields{.mass = true, .momentum = true, .force = true}>();
+    accelerations_and_velocities();
+    gather<GatherFields{.velocity = true, .position = true, .deformation = true}>("g2p");
   }
-  // the carriers of the consistent mass: particles, or the Gauss points (thesis eq. 3.9)
-  const ParticleView<Dim> carriers = gauss_ ? gauss_->mass_view() : pv;
-  const CellBins<Dim>& carrier_bins = gauss_ ? gauss_->bins() : bins_;
-  auto gather = [&]<GatherFields Fields>(const char* stage) {
-    parallel_over(np, particle_grain,
-                  [&](std::size_t b, std::size_t e) { gather_g2p<Fields, Dim, S>(basis, pv, gv, b, e, dt, stress, guard); });
-    const std::size_t bad = guard.first_bad.load();
-    if (bad != ParticleGuard::none) raise_unstable(bad, stage);
-  };
-  const bool consistent_a = scene_.algorithm.mass == MassMatrix::consistent;
-  const bool consistent_v = scene_.algorithm.mass != MassMatrix::lumped;
-  // empty and fixed DOFs get no acceleration and no velocity
-  auto free_dof = [&](int d, std::size_t i) { return grid_.m[i] > empty_mass_ && !grid_.fixed[d][i]; };
-  // a = M⁻¹ f (eqs 2.34, 2.46)
-  auto accelerations = [&] {
-    if (consistent_a) {
-      solve_consistent(basis, carriers, carrier_bins, grid_.a, grid_.f);
+
+  /// Thesis Algorithm 2.
+  void musl() {
+    sim_.clear_grid(true, false, true);
+    scatter<ScatterFields{.mass = true, .momentum = false, .force = true}>();
+    accelerations();
+    sim_.clear_grid(false, true, false);
+    if (sim_.gauss_) {
+      gather<GatherFields{.velocity = true, .position = false, .deformation = false}>("g2p-velocity");
+      scatter<ScatterFields{.mass = false, .momentum = true, .force = false}>(true);
     } else {
-      parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i)
-          for (int d = 0; d < Dim; ++d) grid_.a[d][i] = free_dof(d, i) ? grid_.f[d][i] / grid_.m[i] : 0.0;
+      const unsigned* order = sim_.bins_.order().data();
+      sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
+        sim_.block_momentum_[block] = advance_velocity_scatter_momentum<Dim, S>(basis_, pv_, gv_, order, b, e, dt_);
       });
+      sim_.check_momentum(sum_totals(sim_.block_momentum_));
     }
-  };
-  // v = M⁻¹ q (eqs 2.35, 2.49; with the consistent mass, thesis eq. 3.10)
-  auto velocities = [&] {
-    if (consistent_v) {
-      solve_consistent(basis, carriers, carrier_bins, grid_.v, grid_.q);
+    velocities();
+    gather<GatherFields{.velocity = false, .position = true, .deformation = true}>("g2p-position-deformation");
+  }
+
+  /// Stress first, from the velocities mapped at the start of the step.
+  void usf() {
+    sim_.clear_grid(true, true, true);
+    scatter<ScatterFields{.mass = true, .momentum = true, .force = false}>();
+    velocities();
+    gather<GatherFields{.velocity = false, .position = false, .deformation = true}>("g2p-deformation");
+    scatter<ScatterFields{.mass = false, .momentum = false, .force = true}>();
+    accelerations();
+    advance_velocities();
+    gather<GatherFields{.velocity = true, .position = true, .deformation = false}>("g2p-velocity-position");
+  }
+
+ private:
+  /// P2G, direct (particles as integration points) or from the Gauss points of the reconstruction, which is
+  /// rebuilt from the particles first (with stress and body force when the force is scattered);
+  /// `only_velocities_changed` since the last scatter (MUSL's second P2G): the reconstruction reuses its work.
+  template <ScatterFields Fields>
+  void scatter(bool only_velocities_changed = false) {
+    if constexpr (Fields.force)
+      if (sim_.scene_.algorithm.ddmpm_subpoints > 1) sim_.check_subpoint_reach();
+    if (sim_.gauss_) {
+      GaussPoints<Dim>& gauss = *sim_.gauss_;
+      const MomentumTotals<Dim> totals =
+          only_velocities_changed ? gauss.rebuild_momentum(pv_, *sim_.particle_cells_, sim_.bins_, body_)
+                                  : gauss.rebuild(pv_, *sim_.particle_cells_, sim_.bins_, body_, Fields.force, Fields.momentum);
+      gauss.template scatter<Fields, F::active, S>(basis_, gv_);
+      if constexpr (Fields.momentum) sim_.check_momentum(totals);
     } else {
-      parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
-        for (std::size_t i = b; i < e; ++i)
-          for (int d = 0; d < Dim; ++d) grid_.v[d][i] = free_dof(d, i) ? grid_.q[d][i] / grid_.m[i] : 0.0;
+      const unsigned* order = sim_.bins_.order().data();
+      sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
+        const auto totals = scatter_p2g<Fields, Dim, S>(basis_, pv_, gv_, order, b, e, body_);
+        if constexpr (Fields.momentum) sim_.block_momentum_[block] = totals;
       });
+      if constexpr (Fields.momentum) sim_.check_momentum(sum_totals(sim_.block_momentum_));
     }
-  };
-  auto advance_velocities = [&] {  // v^{s+1} = v^s + Δt a (eq. 2.36)
-    parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
-      for (std::size_t i = b; i < e; ++i)
-        for (int d = 0; d < Dim; ++d) grid_.v[d][i] += dt * grid_.a[d][i];
+    if constexpr (Fields.force)
+      if (sim_.problem_->has_point_loads())
+        add_point_loads<Dim, S>(basis_, gv_, sim_.problem_->point_loads(sim_.time_, pv_, np_));
+    if constexpr (Fields.mass) sim_.check_mass();
+  }
+
+  template <GatherFields Fields>
+  void gather(const char* stage) {
+    const auto stress = [&](const double* Fp, double* s) { material_.template stress<Dim>(Fp, s); };
+    parallel_over(np_, particle_grain, [&](std::size_t b, std::size_t e) {
+      gather_g2p<Fields, Dim, S>(basis_, pv_, gv_, b, e, dt_, stress, guard_);
     });
-  };
-  // USL grid update, eqs 2.34–2.36; with the lumped mass in one pass over the grid (same arithmetic)
-  auto accelerations_and_velocities = [&] {
-    if (consistent_v) {
+    const std::size_t bad = guard_.first_bad.load();
+    if (bad != ParticleGuard::none) sim_.raise_unstable(bad, stage);
+  }
+
+  /// Empty and fixed DOFs get no acceleration and no velocity.
+  bool free_dof(int d, std::size_t i) const { return sim_.grid_.m[i] > sim_.empty_mass_ && !sim_.grid_.fixed[d][i]; }
+
+  /// x = M⁻¹ rhs with the consistent mass; its carriers are the particles, or the Gauss points (thesis eq. 3.9).
+  void solve_consistent(std::array<std::vector<double>, Dim>& x, const std::array<std::vector<double>, Dim>& rhs) {
+    const MassCarriers<Dim> carriers = sim_.gauss_ ? MassCarriers<Dim>(sim_.gauss_->view()) : pv_.carriers();
+    const CellBins<Dim>& bins = sim_.gauss_ ? sim_.gauss_->bins() : sim_.bins_;
+    sim_.cg_iterations_ += sim_.mass_solver_->solve(basis_, carriers, bins, sim_.grid_.stride1, sim_.grid_.m,
+                                                    [&](int d, std::size_t i) { return free_dof(d, i); }, x, rhs);
+  }
+
+  /// out = in / m on the free DOFs (the lumped mass), 0 elsewhere.
+  void divide_by_lumped_mass(std::array<std::vector<double>, Dim>& out, const std::array<std::vector<double>, Dim>& in) {
+    parallel_over(sim_.grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i)
+        for (int d = 0; d < Dim; ++d) out[d][i] = free_dof(d, i) ? in[d][i] / sim_.grid_.m[i] : 0.0;
+    });
+  }
+
+  /// a = M⁻¹ f (eqs 2.34, 2.46).
+  void accelerations() {
+    if (sim_.scene_.algorithm.mass == MassMatrix::consistent) solve_consistent(sim_.grid_.a, sim_.grid_.f);
+    else divide_by_lumped_mass(sim_.grid_.a, sim_.grid_.f);
+  }
+
+  /// v = M⁻¹ q (eqs 2.35, 2.49; with the consistent mass, thesis eq. 3.10).
+  void velocities() {
+    if (sim_.scene_.algorithm.mass != MassMatrix::lumped) solve_consistent(sim_.grid_.v, sim_.grid_.q);
+    else divide_by_lumped_mass(sim_.grid_.v, sim_.grid_.q);
+  }
+
+  /// v^{s+1} = v^s + Δt a (eq. 2.36).
+  void advance_velocities() {
+    GridState<Dim>& grid = sim_.grid_;
+    parallel_over(grid.dofs, 4096, [&](std::size_t b, std::size_t e) {
+      for (std::size_t i = b; i < e; ++i)
+        for (int d = 0; d < Dim; ++d) grid.v[d][i] += dt_ * grid.a[d][i];
+    });
+  }
+
+  /// USL grid update, eqs 2.34–2.36; with the lumped mass in one pass over the grid (same arithmetic).
+  void accelerations_and_velocities() {
+    if (sim_.scene_.algorithm.mass != MassMatrix::lumped) {
       accelerations();
       velocities();
       advance_velocities();
       return;
     }
-    parallel_over(grid_.dofs, 4096, [&](std::size_t b, std::size_t e) {
+    GridState<Dim>& grid = sim_.grid_;
+    parallel_over(grid.dofs, 4096, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i)
         for (int d = 0; d < Dim; ++d) {
           const bool free = free_dof(d, i);
-          grid_.a[d][i] = free ? grid_.f[d][i] / grid_.m[i] : 0.0;
-          grid_.v[d][i] = free ? grid_.q[d][i] / grid_.m[i] + dt * grid_.a[d][i] : 0.0;
+          grid.a[d][i] = free ? grid.f[d][i] / grid.m[i] : 0.0;
+          grid.v[d][i] = free ? grid.q[d][i] / grid.m[i] + dt_ * grid.a[d][i] : 0.0;
         }
     });
-  };
-
-  switch (scene_.algorithm.update) {
-    case Update::usl:  // thesis Algorithm 1
-      clear_grid(true, true, true);
-      scatter.template operator()<ScatterFields{true, true, true}>();
-      accelerations_and_velocities();
-      gather.template operator()<GatherFields{true, true, true}>("g2p");
-      break;
-    case Update::musl:  // thesis Algorithm 2
-      clear_grid(true, false, true);
-      scatter.template operator()<ScatterFields{true, false, true}>();
-      accelerations();
-      clear_grid(false, true, false);
-      if (gauss_) {
-        gather.template operator()<GatherFields{true, false, false}>("g2p-velocity");
-        scatter.template operator()<ScatterFields{false, true, false}>(true);
-      } else {
-        bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-          block_momentum_[block] = advance_velocity_scatter_momentum<Dim, S>(basis, pv, gv, order, b, e, dt);
-        });
-        check_momentum(sum_totals(block_momentum_));
-      }
-      velocities();
-      gather.template operator()<GatherFields{false, true, true}>("g2p-position-deformation");
-      break;
-    case Update::usf:  // stress first, from the velocities mapped at the start of the step
-      clear_grid(true, true, true);
-      scatter.template operator()<ScatterFields{true, true, false}>();
-      velocities();
-      gather.template operator()<GatherFields{false, false, true}>("g2p-deformation");
-      scatter.template operator()<ScatterFields{false, false, true}>();
-      accelerations();
-      advance_velocities();
-      gather.template operator()<GatherFields{true, true, false}>("g2p-velocity-position");
-      break;
   }
-  return guard.max_move_cells.load();
+
+  Simulation& sim_;
+  const B& basis_;
+  const M& material_;
+  const F& body_;
+  const double dt_;
+  const ParticleView<Dim> pv_;
+  const GridView<Dim> gv_;
+  const std::size_t np_;
+  ParticleGuard guard_;
+};
+
+template <int Dim>
+template <class B, class M, class F>
+double Simulation<Dim>::step_with(const B& basis, const M& material, const F& body, double dt) {
+  cg_iterations_ = 0;
+  Step<B, M, F> step(*this, basis, material, body, dt);
+  switch (scene_.algorithm.update) {
+    case Update::usl: step.usl(); break;
+    case Update::musl: step.musl(); break;
+    case Update::usf: step.usf(); break;
+  }
+  return step.max_move();
 }
 
 template <int Dim>

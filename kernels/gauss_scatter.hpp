@@ -11,11 +11,10 @@
 
 namespace mpm {
 
-/// The reconstructed fields at the Gauss points, already multiplied by the quadrature weight ω_g.
+/// The reconstructed fields at the Gauss points, already multiplied by the quadrature weight ω_g: the points as
+/// mass carriers (x, and m = ρ̂ω) and what else they carry.
 template <int Dim>
-struct GaussView {
-  std::array<const double*, Dim> x{};
-  const double* m = nullptr;                        ///< ρ̂ ω
+struct GaussView : MassCarriers<Dim> {
   std::array<const double*, Dim> q{};               ///< ρv̂ ω
   std::array<const double*, sym_components<Dim>> s{};  ///< σ̂ ω
   std::array<const double*, Dim> fb{};              ///< ρb̂ ω

@@ -275,24 +275,33 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
   if constexpr (Fields.position) guard.moved(max_move);
 }
 
-/// y += M x for particles order[begin..end), with the consistent mass M_ij = Σ_p φ_i m_p φ_j (eq. 2.31), applied
-/// matrix-free: a gather of x to the particle followed by a scatter of m_p times it. Components are independent.
+/// Entries per row of the consistent mass in band storage: the (2S − 1)^Dim functions j whose support overlaps
+/// that of function i.
+template <int Dim, int S>
+inline constexpr int mass_band = Dim == 1 ? 2 * S - 1 : (2 * S - 1) * (2 * S - 1);
+
+/// band += the consistent mass M_ij = Σ_p φ_i m_p φ_j (eq. 2.31, thesis eq. 3.9) of carriers order[begin..end): row
+/// i holds M_ij at band[i · mass_band + o], o = (j0 − i0 + S − 1) + (2S − 1)(j1 − i1 + S − 1). Assembled once per
+/// solve, the CG iterations multiply by the band instead of gathering and scattering at every carrier.
 template <int Dim, int S, class Axis>
-inline void apply_consistent_mass(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim> p, int stride1,
-                                  std::array<const double*, Dim> x, std::array<double*, Dim> y,
-                                  const unsigned* order, std::size_t begin, std::size_t end) {
+inline void assemble_consistent_mass(const TensorBasis<Dim, Axis>& basis, MassCarriers<Dim> c, int stride1,
+                                     double* band, const unsigned* order, std::size_t begin, std::size_t end) {
+  constexpr int W = 2 * S - 1, rows = Dim == 1 ? 1 : S;
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
-    const auto st = stencil_of<Dim, S>(basis, p.x, ip);
-    RowVector<S> x_y[Dim] = {};  // Σ_j wy_j x_ij, then contracted with wx (as in gather_g2p)
-    for_each_row(st, stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
-      for (int d = 0; d < Dim; ++d) x_y[d] += wy * load_row<RowVector<S>>(x[d] + row);
-    });
-    double mx[Dim];  // m_p Σ_j φ_j x_j
-    for (int d = 0; d < Dim; ++d) mx[d] = p.m[ip] * reduce(st.wx * x_y[d]);
-    for_each_row(st, stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
-      for (int d = 0; d < Dim; ++d) add_to_row(y[d] + row, st.wx * (wy * mx[d]));
-    });
+    const auto st = stencil_of<Dim, S>(basis, c.x, ip);
+    double wx[S], wy[rows];
+    for (int a = 0; a < S; ++a) wx[a] = st.wx[a];
+    for (int a = 0; a < rows; ++a) wy[a] = Dim == 1 ? 1.0 : st.wy[a];
+    for (int a1 = 0; a1 < rows; ++a1)
+      for (int a0 = 0; a0 < S; ++a0) {
+        const double m_phi = c.m[ip] * wx[a0] * wy[a1];  // m_p φ_i
+        double* row = band + static_cast<std::size_t>((st.first1 + a1) * stride1 + st.first0 + a0) * mass_band<Dim, S>;
+        for (int b1 = 0; b1 < rows; ++b1) {
+          double* at = row + W * (b1 - a1 + S - 1) * (Dim - 1) + (S - 1 - a0);
+          for (int b0 = 0; b0 < S; ++b0) at[b0] += m_phi * wx[b0] * wy[b1];
+        }
+      }
   }
 }
 

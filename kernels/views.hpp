@@ -21,6 +21,14 @@ constexpr int sym_index(int a, int b) {
   else return a == b ? (a == 0 ? 0 : 2) : 1;
 }
 
+/// Points that carry mass, the integration points of the consistent mass M_ij = Σ φ_i m φ_j (thesis eq. 3.9):
+/// the particles, or the Gauss points of a reconstructed mapping.
+template <int Dim>
+struct MassCarriers {
+  std::array<const double*, Dim> x{};
+  const double* m = nullptr;
+};
+
 template <int Dim>
 struct ParticleView {
   std::array<double*, Dim> x{};               ///< current position
@@ -30,6 +38,12 @@ struct ParticleView {
   std::array<double*, sym_components<Dim>> s{};  ///< Cauchy stress, packed symmetric
   const double* m = nullptr;                  ///< mass (constant)
   const double* V0 = nullptr;                 ///< initial volume
+  MassCarriers<Dim> carriers() const {
+    MassCarriers<Dim> c;
+    for (int d = 0; d < Dim; ++d) c.x[d] = x[d];
+    c.m = m;
+    return c;
+  }
 };
 
 template <int Dim>
