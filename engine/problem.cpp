@@ -17,7 +17,7 @@ BodyForce<Dim> Problem<Dim>::body_force(double, std::array<const double*, Dim>) 
 }
 
 template <int Dim>
-std::vector<PointLoad<Dim>> Problem<Dim>::point_loads(double, const ParticleView<Dim>&, std::size_t) const {
+std::vector<PointLoad<Dim>> Problem<Dim>::point_loads(double, const ParticleView<Dim>&, std::size_t, bool) const {
   return {};
 }
 
@@ -144,8 +144,8 @@ class VibratingBarTraction final : public Problem<1> {
     return {{{0.0}, {bar_.length}, mat_, [](const std::array<double, 1>&) { return std::array<double, 1>{}; }}};
   }
   bool has_point_loads() const override { return true; }
-  std::vector<PointLoad<1>> point_loads(double t, const ParticleView<1>& p, std::size_t n) const override {
-    return {{{body_extent_1d(p, n).hi}, {bar_.traction(t)}}};  // outward normal +1: force = σ(l, t)
+  std::vector<PointLoad<1>> point_loads(double t, const ParticleView<1>& p, std::size_t n, bool reference) const override {
+    return {{{body_extent_1d(p, n, reference).hi}, {bar_.traction(t)}}};  // outward normal +1: force = σ(l, t)
   }
   bool has_exact() const override { return true; }
   ExactState<1> exact(const std::array<double, 1>& X, double t) const override {

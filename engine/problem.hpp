@@ -96,8 +96,10 @@ class Problem {
   virtual BodyForce<Dim> body_force(double t, std::array<const double*, Dim> X) const;
   /// Whether the problem loads the grid with point forces (then point_loads is called at every force scatter).
   virtual bool has_point_loads() const { return false; }
-  /// The point forces at time t on the current particles (n of them).
-  virtual std::vector<PointLoad<Dim>> point_loads(double t, const ParticleView<Dim>& p, std::size_t n) const;
+  /// The point forces at time t on the particles (n of them), placed in the current configuration, or in the
+  /// reference one (`reference`) for a basis that moves with the body.
+  virtual std::vector<PointLoad<Dim>> point_loads(double t, const ParticleView<Dim>& p, std::size_t n,
+                                                  bool reference = false) const;
   virtual bool has_exact() const { return false; }
   virtual ExactState<Dim> exact(const std::array<double, Dim>& X, double t) const;
 };

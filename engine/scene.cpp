@@ -289,7 +289,11 @@ constexpr std::array<std::pair<const char*, Layout>, 3> kLayout{
     {{"uniform", Layout::uniform}, {"gauss", Layout::gauss}, {"random", Layout::random}}};
 constexpr std::array<std::pair<const char*, MaterialModel>, 2> kModel{
     {{"linear-elastic", MaterialModel::linear_elastic}, {"neo-hookean", MaterialModel::neo_hookean}}};
-constexpr std::array<std::pair<const char*, Update>, 3> kUpdate{{{"usl", Update::usl}, {"musl", Update::musl}, {"usf", Update::usf}}};
+constexpr std::array<std::pair<const char*, Update>, 5> kUpdate{{{"usl", Update::usl},
+                                                                 {"musl", Update::musl},
+                                                                 {"usf", Update::usf},
+                                                                 {"otm", Update::otm},
+                                                                 {"unified", Update::unified}}};
 constexpr std::array<std::pair<const char*, MassMatrix>, 3> kMass{
     {{"lumped", MassMatrix::lumped}, {"projection", MassMatrix::projection}, {"consistent", MassMatrix::consistent}}};
 constexpr std::array<std::pair<const char*, Mapping>, 4> kMapping{{{"direct", Mapping::direct},
@@ -499,6 +503,26 @@ void read_particles(const Node& top, Scene& s) {
   }
 }
 
+/// OTM (thesis §4.2.1) is defined for consistent bases, piecewise-linear or max-ent; the unified approach
+/// (Algorithm 4) for B-splines; both scatter from the particles and solve with the consistent mass (eqs 4.28, 4.81).
+void check_moving_basis(const Node& alg, const Scene& s) {
+  const AlgorithmSpec& a = s.algorithm;
+  const json& update = *alg.find("update");
+  const std::string method = a.update == Update::otm ? "OTM (thesis §4.2.1)" : "the unified approach (thesis Algorithm 4)";
+  const bool otm_basis = s.grid.basis == Basis::linear || s.grid.basis == Basis::maxent;
+  const bool bspline = s.grid.basis == Basis::linear || s.grid.basis == Basis::bspline2 || s.grid.basis == Basis::bspline3;
+  if (a.update == Update::otm ? !otm_basis : !bspline)
+    fail("algorithm.update", update,
+         method + " is defined with grid.basis = " + (a.update == Update::otm ? "\"linear\" or \"maxent\"" : "\"linear\", \"bspline2\" or \"bspline3\"") +
+             ", not \"" + name_of(s.grid.basis, kBasis) + "\"");
+  if (a.mass != MassMatrix::consistent)
+    fail("algorithm.update", update, method + " solves with the consistent mass: expected algorithm.mass = \"consistent\", not \"" +
+                                         name_of(a.mass, kMass) + "\"");
+  if (a.mapping != Mapping::direct)
+    fail("algorithm.update", update, method + " integrates at the particles: expected algorithm.mapping = \"direct\", not \"" +
+                                         name_of(a.mapping, kMapping) + "\"");
+}
+
 void read_algorithm(const Node& top, Scene& s) {
   const int dim = s.dimension;
   const Node alg = object_at(top.find("algorithm"), "algorithm", section_keys("algorithm"));
@@ -512,6 +536,7 @@ void read_algorithm(const Node& top, Scene& s) {
   a.mls_support = number(alg, "mls_support", 2.0, [](double r) { return r > 0.5 && r <= 10; }, "a number in (0.5, 10] (cells)");
   a.tls_degree = static_cast<int>(integer(alg, "tls_degree", 1, 0, 2, "0, 1 or 2"));
   a.ddmpm_subpoints = static_cast<int>(integer(alg, "ddmpm_subpoints", 1, 1, 1024, "an integer in 1..1024"));
+  if (basis_moves_with_body(a.update)) check_moving_basis(alg, s);
   if (const json* sub = alg.find("ddmpm_subpoints"); sub && a.ddmpm_subpoints > 1) {
     // the sub-point integration of Dhakal & Zhang replaces DDMPM's particle integration of the force in 1D
     if (s.grid.basis != Basis::ddmpm)

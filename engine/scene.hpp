@@ -21,10 +21,14 @@ enum class Basis { linear, bspline2, bspline3, ddmpm, maxent };
 enum class BasisPath { fast, generic };
 enum class Layout { uniform, gauss, random };
 enum class MaterialModel { linear_elastic, neo_hookean };
-enum class Update { usl, musl, usf };
+enum class Update { usl, musl, usf, otm, unified };
 enum class MassMatrix { lumped, projection, consistent };
 enum class Mapping { direct, mls, tls, cubic_spline };
 enum class ProblemName { none, vibrating_bar, vibrating_plate, column_compaction, vibrating_bar_traction };
+
+/// OTM (thesis Algorithm 3) and the unified approach (Algorithm 4) carry their basis with the body: each particle
+/// evaluates it at its reference position, and gradients are pulled back by F (simulation_impl.hpp, Step::usl).
+constexpr bool basis_moves_with_body(Update u) { return u == Update::otm || u == Update::unified; }
 
 /// Polynomial degree of a basis choice (DDMPM: its piecewise-linear values; max-ent: linear completeness).
 constexpr int degree_of(Basis b) {

@@ -78,11 +78,12 @@ CellLayout cell_layout(const ParticleSpec& spec, int dim, std::mt19937_64* rng) 
 }
 
 template <int Dim>
-FieldSet needed_fields(const Problem<Dim>& problem) {
+FieldSet needed_fields(const Problem<Dim>& problem, Update update) {
   FieldSet f;
   f.add(Field::position).add(Field::velocity).add(Field::deformation).add(Field::stress);
   f.add(Field::mass).add(Field::volume0);
-  if (problem.has_exact() || problem.body_force_needs_reference()) f.add(Field::reference);
+  if (problem.has_exact() || problem.body_force_needs_reference() || basis_moves_with_body(update))
+    f.add(Field::reference);
   return f;
 }
 
@@ -147,7 +148,10 @@ std::vector<std::string> scheme_stages(const Scene& scene, bool body_force) {
   const std::string vel = consistent_v ? "grid-velocity-cg" : "grid-velocity";
   switch (scene.algorithm.update) {
     case Update::usl:
+    case Update::unified:
       return {"bin", "p2g-mass-momentum", p2g_force, accel, vel, "g2p-velocity-position-deformation", "stress"};
+    case Update::otm:
+      return {"bin", "p2g-mass-momentum", p2g_force, accel, vel, "g2p-position-velocity-deformation", "stress"};
     case Update::musl:
       return {"bin", "p2g-mass", p2g_force, accel, "g2p-velocity+p2g-momentum", vel, "g2p-position-deformation",
               "stress"};
@@ -290,7 +294,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
   const Seeds<Dim> seeds = seed_particles(scene, *problem_);
   const std::size_t n = seeds.x.size();
   if (n == 0) throw SceneError("scene: bodies: no particle falls inside any body");
-  store_ = ParticleStore<Dim>(n, needed_fields(*problem_));
+  store_ = ParticleStore<Dim>(n, needed_fields(*problem_, scene.algorithm.update));
   auto pv = store_.view();
   for (std::size_t p = 0; p < n; ++p) {
     for (int d = 0; d < Dim; ++d) {
@@ -385,7 +389,9 @@ void Simulation<Dim>::step() {
   const bool reorder = step_ % reorder_every == 0;
   if (next_step_bins()) {
     std::array<const double*, Dim> x;
-    for (int d = 0; d < Dim; ++d) x[d] = store_.column(Field::position, d).data();
+    // a basis that moves with the body is evaluated at the reference positions, which never leave their cells
+    const Field at = basis_moves_with_body(scene_.algorithm.update) ? Field::reference : Field::position;
+    for (int d = 0; d < Dim; ++d) x[d] = store_.column(at, d).data();
     bins_.bin(x, store_.size());
     moved_cells_ = 0.0;
   }
@@ -498,12 +504,19 @@ class Simulation<Dim>::Step {
   /// The largest distance a particle moved along an axis, in cells.
   double max_move() const { return guard_.max_move_cells.load(); }
 
-  /// Thesis Algorithm 1.
+  /// Thesis Algorithm 1. With `reference`, the basis moves with the body (each particle keeps its place in the
+  /// mesh: φ_i at its reference position, ∇φ_i pulled back by F): with the consistent mass, the unified approach
+  /// (thesis Algorithm 4); with the velocity from the position increment as well, OTM (Algorithm 3, eq. 4.53).
+  template <bool reference = false, bool velocity_from_position = false>
   void usl() {
     sim_.clear_grid(true, true, true);
-    scatter<ScatterFields{.mass = true, .momentum = true, .force = true}>();
+    scatter<ScatterFields{.mass = true, .momentum = true, .force = true, .reference = reference}>();
     accelerations_and_velocities();
-    gather<GatherFields{.velocity = true, .position = true, .deformation = true}>("g2p");
+    gather<GatherFields{.velocity = !velocity_from_position,
+                        .position = true,
+                        .deformation = true,
+                        .reference = reference,
+                        .velocity_from_position = velocity_from_position}>("g2p");
   }
 
   /// Thesis Algorithm 2.
@@ -563,7 +576,7 @@ class Simulation<Dim>::Step {
     }
     if constexpr (Fields.force)
       if (sim_.problem_->has_point_loads())
-        add_point_loads<Dim, S>(basis_, gv_, sim_.problem_->point_loads(sim_.time_, pv_, np_));
+        add_point_loads<Dim, S>(basis_, gv_, sim_.problem_->point_loads(sim_.time_, pv_, np_, Fields.reference));
     if constexpr (Fields.mass) sim_.check_mass();
   }
 
@@ -582,7 +595,8 @@ class Simulation<Dim>::Step {
 
   /// x = M⁻¹ rhs with the consistent mass; its carriers are the particles, or the Gauss points (thesis eq. 3.9).
   void solve_consistent(std::array<std::vector<double>, Dim>& x, const std::array<std::vector<double>, Dim>& rhs) {
-    const MassCarriers<Dim> carriers = sim_.gauss_ ? MassCarriers<Dim>(sim_.gauss_->view()) : pv_.carriers();
+    const MassCarriers<Dim> carriers = sim_.gauss_ ? MassCarriers<Dim>(sim_.gauss_->view())
+                                       : pv_.carriers(basis_moves_with_body(sim_.scene_.algorithm.update));
     const CellBins<Dim>& bins = sim_.gauss_ ? sim_.gauss_->bins() : sim_.bins_;
     sim_.cg_iterations_ += sim_.mass_solver_->solve(basis_, carriers, bins, sim_.grid_.stride1, sim_.grid_.m,
                                                     [&](int d, std::size_t i) { return free_dof(d, i); }, x, rhs);
@@ -656,6 +670,8 @@ double Simulation<Dim>::step_with(const B& basis, const M& material, const F& bo
     case Update::usl: step.usl(); break;
     case Update::musl: step.musl(); break;
     case Update::usf: step.usf(); break;
+    case Update::unified: step.template usl<true>(); break;
+    case Update::otm: step.template usl<true, true>(); break;
   }
   return step.max_move();
 }
@@ -746,26 +762,24 @@ std::array<const double*, Dim> Simulation<Dim>::reference_columns() const {
 
 template <int Dim>
 double Simulation<Dim>::external_power() const {
-  // Point loads (the traction bar): force · velocity of the particle nearest the load point. Without this term the
-  // energy guard saw the traction's work as an energy gain and stopped every traction run at its first sample.
+  // Point loads (the traction bar): force · the grid velocity at the load point, Σ_i φ_i(x) F · v_i, the power of the
+  // nodal forces the load adds (point_load.hpp). Without this term the energy guard saw the traction's work as an
+  // energy gain; with the velocity of the particle nearest the load instead, it stopped the unified approach, whose
+  // sharp wave front had not yet reached that particle, h/8 inside the end.
   double loads_power = 0.0;
   if (problem_->has_point_loads()) {
-    const std::size_t n = store_.size();
     // point_loads only reads the particles; view() is the store's one accessor for them
     const ParticleView<Dim> pv = const_cast<ParticleStore<Dim>&>(store_).view();
-    for (const auto& load : problem_->point_loads(time_, pv, n)) {
-      std::size_t nearest = 0;
-      double best = std::numeric_limits<double>::infinity();
-      for (std::size_t p = 0; p < n; ++p) {
-        double d2 = 0.0;
-        for (int d = 0; d < Dim; ++d) d2 += (pv.x[d][p] - load.x[d]) * (pv.x[d][p] - load.x[d]);
-        if (d2 < best) {
-          best = d2;
-          nearest = p;
-        }
-      }
-      for (int d = 0; d < Dim; ++d) loads_power += n > 0 ? load.force[d] * pv.v[d][nearest] : 0.0;
-    }
+    const bool reference = basis_moves_with_body(scene_.algorithm.update);
+    for (const auto& load : problem_->point_loads(time_, pv, store_.size(), reference))
+      std::visit(
+          [&](const auto& basis) {
+            const auto st = stencil_at<Dim, std::decay_t<decltype(basis)>::width>(basis, load.x.data());
+            for_each_node(st, grid_.stride1, [&](int i, double w, const std::array<double, Dim>&) {
+              for (int d = 0; d < Dim; ++d) loads_power += w * load.force[d] * grid_.v[d][i];
+            });
+          },
+          basis_);
   }
   if (!problem_->has_body_force()) return loads_power;
   const auto& s = store_;

@@ -20,6 +20,9 @@ struct ScatterFields {
   bool mass;      ///< m_i = Σ_p φ_i(x_p) m_p                         (eq. 2.31 lumped)
   bool momentum;  ///< q_i = Σ_p φ_i(x_p) m_p v_p                      (eqs 2.32, 2.48)
   bool force;     ///< f_i = Σ_p (−∇φ_i·σ_p V_p + φ_i m_p b_p)        (eqs 2.33, 2.45; sign of the weak form 2.16)
+  /// The basis moves with the body (thesis Algorithms 3–4): φ_i at the reference position X_p, ∇φ_i = F⁻ᵀ ∇_X φ_i,
+  /// so f_i = Σ_p (−∇_X φ_i · V0_p adj(F_p) σ_p + φ_i m_p b_p) (eqs 4.30, 4.83 with V_p F⁻¹ = V0_p adj F).
+  bool reference = false;
 };
 
 /// Which particle updates one G2P pass performs.
@@ -27,7 +30,18 @@ struct GatherFields {
   bool velocity;     ///< v_p += Δt Σ_i φ_i a_i                       (eqs 2.39, 2.47)
   bool position;     ///< x_p += Δt Σ_i φ_i v_i                       (eqs 2.38, 2.51)
   bool deformation;  ///< F_p ← (I + Δt Σ_i v_i ⊗ ∇φ_i) F_p, then σ_p (eqs 2.40–2.41, 2.52–2.53)
+  /// As ScatterFields::reference; then F_p ← F_p + Δt Σ_i v_i ⊗ ∇_X φ_i, the same update (eqs 4.35, 4.89).
+  bool reference = false;
+  /// v_p = Δx_p / Δt, the position increment (OTM, thesis eq. 4.53), with `position`.
+  bool velocity_from_position = false;
 };
+
+/// The columns a particle's basis functions are evaluated at: current or reference positions.
+template <bool reference, int Dim>
+MPM_INLINE auto basis_points(const ParticleView<Dim>& p) {
+  if constexpr (reference) return p.X;
+  else return p.x;
+}
 
 /// Body force per unit mass: none.
 struct NoBodyForce {
@@ -144,7 +158,7 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
   MomentumTotals<Dim> totals;
   for (std::size_t k = begin; k < end; ++k) {
     const std::size_t ip = order[k];
-    const auto st = stencil_of<Dim, S>(basis, p.x, ip);
+    const auto st = stencil_of<Dim, S>(basis, basis_points<Fields.reference>(p), ip);
     const double mp = p.m[ip];
     double mv[Dim] = {};
     if constexpr (Fields.momentum) {
@@ -161,6 +175,13 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
       const double V = det(p, ip) * p.V0[ip];  // eq. 2.42
       for (int a = 0; a < Dim; ++a)
         for (int b = 0; b < Dim; ++b) Vsig[a][b] = V * p.s[sym_index<Dim>(a, b)][ip];
+      if constexpr (Fields.reference && Dim == 2) {  // V F⁻¹ σ = V0 adj(F) σ; in 1D V/F = V0
+        const double adj[2][2] = {{p.F[3][ip], -p.F[1][ip]}, {-p.F[2][ip], p.F[0][ip]}};
+        for (int a = 0; a < 2; ++a)
+          for (int b = 0; b < 2; ++b) Vsig[a][b] = p.V0[ip] * (adj[a][0] * p.s[sym_index<2>(0, b)][ip] + adj[a][1] * p.s[sym_index<2>(1, b)][ip]);
+      } else if constexpr (Fields.reference) {
+        Vsig[0][0] = p.V0[ip] * p.s[0][ip];
+      }
       if constexpr (Body::active) {
         const auto b = body.template at<Dim>(ip);
         for (int d = 0; d < Dim; ++d) mb[d] = mp * b[d];
@@ -220,7 +241,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
   for (std::size_t first = begin; first < end; first += batch) {
     const std::size_t last = std::min(end, first + batch);
     for (std::size_t ip = first; ip < last; ++ip) {
-      const auto st = stencil_of<Dim, S>(basis, p.x, ip);
+      const auto st = stencil_of<Dim, S>(basis, basis_points<Fields.reference>(p), ip);
       // φ_i = wx_i wy_j: contract the rows along axis 1 first (a_y = Σ_j wy_j a_ij, and with dwy_j for ∂₁), then
       // along axis 0 with wx or dwx; ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
       RowVector<S> a_y[Dim] = {}, v_y[Dim] = {}, v_dy[Dim] = {};
@@ -240,6 +261,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
         for (int d = 0; d < Dim; ++d) {
           const double dx = dt * reduce(st.wx * v_y[d]);
           p.x[d][ip] += dx;
+          if constexpr (Fields.velocity_from_position) p.v[d][ip] = dx / dt;
           max_move = std::max(max_move, std::abs(dx) * inv_h[d]);
         }
       if constexpr (Fields.deformation) {
@@ -253,7 +275,9 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
         for (int a = 0; a < Dim; ++a)
           for (int b = 0; b < Dim; ++b) {
             double sum = F[a * Dim + b];
-            for (int c = 0; c < Dim; ++c) sum += dt * L[a * Dim + c] * F[c * Dim + b];
+            if constexpr (Fields.reference) sum += dt * L[a * Dim + b];  // L = Σ v_i ⊗ ∇_X φ_i
+            else
+              for (int c = 0; c < Dim; ++c) sum += dt * L[a * Dim + c] * F[c * Dim + b];
             Fn[a * Dim + b] = sum;
           }
         for (int c = 0; c < Dim * Dim; ++c) p.F[c][ip] = Fn[c];
@@ -272,7 +296,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
         if (!(J > 0.0) || !std::isfinite(J + s[0])) guard.flag(ip);
       }
   }
-  if constexpr (Fields.position) guard.moved(max_move);
+  if constexpr (Fields.position && !Fields.reference) guard.moved(max_move);  // (reference: binned once, by X)
 }
 
 /// Entries per row of the consistent mass in band storage: the (2S − 1)^Dim functions j whose support overlaps

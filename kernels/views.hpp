@@ -38,9 +38,10 @@ struct ParticleView {
   std::array<double*, sym_components<Dim>> s{};  ///< Cauchy stress, packed symmetric
   const double* m = nullptr;                  ///< mass (constant)
   const double* V0 = nullptr;                 ///< initial volume
-  MassCarriers<Dim> carriers() const {
+  /// The particles as mass carriers, at their current positions or (`reference`) their reference positions.
+  MassCarriers<Dim> carriers(bool reference = false) const {
     MassCarriers<Dim> c;
-    for (int d = 0; d < Dim; ++d) c.x[d] = x[d];
+    for (int d = 0; d < Dim; ++d) c.x[d] = reference ? X[d] : x[d];
     c.m = m;
     return c;
   }

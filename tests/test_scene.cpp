@@ -72,6 +72,25 @@ TEST_CASE("DDMPM sub-points are refused outside 1D DDMPM with direct mapping - t
   CHECK_THAT(error_of(q), Catch::Contains("algorithm.ddmpm_subpoints") && Catch::Contains("grid.basis"));
 }
 
+TEST_CASE("OTM and the unified approach are refused outside the thesis' combinations - the message names both keys",
+          "[scene][otm]") {
+  json b = bar;
+  b["algorithm"] = {{"update", "unified"}, {"mass", "consistent"}};
+  CHECK(error_of(b).empty());
+  b["algorithm"]["update"] = "otm";
+  CHECK_THAT(error_of(b), Catch::Contains("algorithm.update") && Catch::Contains("grid.basis"));
+  b["grid"]["basis"] = "maxent";
+  CHECK(error_of(b).empty());
+  b["algorithm"]["update"] = "unified";
+  CHECK_THAT(error_of(b), Catch::Contains("algorithm.update") && Catch::Contains("grid.basis"));
+  json p = plate;
+  p["algorithm"] = {{"update", "unified"}};
+  CHECK_THAT(error_of(p), Catch::Contains("algorithm.update") && Catch::Contains("algorithm.mass"));
+  p["algorithm"] = {{"update", "otm"}, {"mass", "consistent"}, {"mapping", "tls"}};
+  p["grid"]["basis"] = "linear";
+  CHECK_THAT(error_of(p), Catch::Contains("algorithm.update") && Catch::Contains("algorithm.mapping"));
+}
+
 TEST_CASE("malformed scenes are refused with a message naming the key", "[scene]") {
   const std::vector<Malformed> cases = {
       {"unknown key in grid", &plate, "/grid/cels", json::array({8, 8}), "grid.cels"},
