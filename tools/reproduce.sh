@@ -42,6 +42,21 @@ study plate-mls tools/scenes/plate-paper.json --set time.end=0.0125 --set algori
 # thesis §4.6.1, Fig 4.7 and Table 4.1: the fixed-ends bar (E = 4 kPa, 12 particles per cell), 8-512 cells
 study bar-otm tools/scenes/bar-otm.json --repeat 3 --vary 'grid.cells=[8],[16],[32],[64],[128],[256],[511]' \
   --vary grid.basis=linear,ddmpm,maxent,bspline2
+# the same bar with the basis carried by the body: OTM-P1 and OTM-maxent (thesis Algorithm 3), the unified approach
+# (Algorithm 4), both with the consistent mass
+study bar-otm-moving tools/scenes/bar-otm.json --repeat 3 --set algorithm.mass=consistent --set grid.basis=linear \
+  --vary algorithm.update=otm \
+  --vary 'grid.cells=[8],[16],[32],[64],[128],[256],[511]' --vary grid.basis=linear,maxent
+study bar-otm-unified tools/scenes/bar-otm.json --repeat 3 --set algorithm.mass=consistent \
+  --vary algorithm.update=unified --vary 'grid.cells=[8],[16],[32],[64],[128],[256],[511]'
+# thesis §4.6.3, Fig 4.10: the plate with B = 0.005 m on 32x32 cells, every method of chapter 4 (USL, as the thesis)
+study plate-4-6-3 tools/scenes/plate-unified.json --set algorithm.update=usl --vary 'grid.cells=[32,32]' \
+  --vary grid.basis=linear,maxent,bspline2
+study plate-4-6-3-otm tools/scenes/plate-unified.json --set algorithm.mass=consistent --set grid.basis=linear \
+  --vary algorithm.update=otm \
+  --vary 'grid.cells=[32,32]' --vary grid.basis=linear,maxent
+study plate-4-6-3-unified tools/scenes/plate-unified.json --set algorithm.mass=consistent \
+  --vary algorithm.update=unified --vary 'grid.cells=[32,32]'
 # thesis Fig 5.9 and Table 5.3: bar without grid crossing (Table 5.2), 5-40 cells, 12 particles per cell
 study bar-mpm tools/scenes/bar.json --repeat 5 --set grid.basis=linear --vary 'grid.cells=[5],[10],[20],[40]' \
   --vary algorithm.mapping=direct,cubic-spline,tls
@@ -62,6 +77,9 @@ study column-ddmpm-tls tools/scenes/column-compaction.json --repeat 3 --set grid
 # thesis §4.6.2: bar with a traction at its free end (neo-Hookean as in the thesis, and linear elastic)
 study bar-traction tools/scenes/bar-traction.json --vary 'grid.cells=[20],[40],[80],[160]' \
   --vary material.model=neo-hookean,linear-elastic --vary algorithm.mapping=direct,cubic-spline,tls
+# thesis §4.6.2, Fig 4.9: the unified approach on the same bar (the material domain carries the basis)
+study bar-traction-unified tools/scenes/bar-traction.json --set algorithm.mass=consistent --vary algorithm.update=unified \
+  --vary 'grid.cells=[20],[40],[80],[160]' --vary material.model=neo-hookean,linear-elastic
 
 /usr/bin/python3 tools/results_md.py --results "$OUT" --out docs/RESULTS.md --seconds $(( $(date +%s) - start ))
 echo "wrote docs/RESULTS.md and $OUT/ in $(( $(date +%s) - start )) s"

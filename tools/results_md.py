@@ -18,6 +18,8 @@ import matplotlib.pyplot as plt  # noqa: E402
 BASIS_NAME = {"linear": "MPM", "ddmpm": "DDMPM", "maxent": "MPM-maxent", "bspline2": "BSMPM", "bspline3": "BSMPM-3"}
 MAPPING_SUFFIX = {"direct": "", "mls": "-MLS", "tls": "-TLS", "cubic-spline": "-CS"}
 FIELDS = [("displacement_rms", "u"), ("velocity_rms", "v"), ("stress_rms", "σ")]
+# a basis carried by the body (algorithm.update): OTM with its basis, the unified approach (B-splines)
+MOVING_NAME = {("otm", "linear"): "OTM-P1", ("otm", "maxent"): "OTM-maxent", ("unified", "bspline2"): "unified"}
 
 # thesis Tables 5.3, 5.5, 5.7: (method, reconstruction) -> (mass, momentum), MPM, DDMPM and BSMPM rows
 THESIS_CONSERVATION = {
@@ -60,7 +62,8 @@ def read_study(results, name, basis="bspline2"):
             b = r.get("grid.basis") or basis
             r["basis"] = b
             r["mapping"] = r.get("algorithm.mapping") or mapping_set(command)
-            r["method"] = BASIS_NAME.get(b, b) + MAPPING_SUFFIX.get(r["mapping"], r["mapping"])
+            r["method"] = MOVING_NAME.get((r.get("algorithm.update"), b)) or (
+                BASIS_NAME.get(b, b) + MAPPING_SUFFIX.get(r["mapping"], r["mapping"]))
             r["cells"] = int(r["grid.cells"].strip("[]").split(",")[0])
             for k, v in list(r.items()):
                 if k.endswith(("_rms", "_l2", "_max", "wall_s", "fallbacks")):
@@ -224,7 +227,8 @@ def subpoints_table(rows, tls):
 
 
 # thesis Table 4.1: time normalised to MPM-P1's with the same number of nodes (32, 512), the thesis' Python
-THESIS_COST = {"MPM-maxent": (16.22, 6.96), "BSMPM": (1.00, 1.11)}
+THESIS_COST = {"MPM-maxent": (16.22, 6.96), "BSMPM": (1.00, 1.11), "OTM-P1": (1.12, 1.04), "OTM-maxent": (26.04, 9.07),
+               "unified": (1.23, 1.15)}
 
 
 def cost_table(rows, cells):
@@ -279,6 +283,13 @@ def main():
     column, column_cmd = read_study(R, "column")
     traction, traction_cmd = read_study(R, "bar-traction")
     otm_bar, otm_bar_cmd = read_study(R, "bar-otm")
+    moving_names = ("bar-otm-moving", "bar-otm-unified")
+    otm_bar += [r for n in moving_names for r in read_study(R, n)[0]]
+    otm_bar_cmd = "\n    ".join([otm_bar_cmd] + [read_study(R, n)[1] for n in moving_names])
+    plate_463_names = ("plate-4-6-3", "plate-4-6-3-otm", "plate-4-6-3-unified")
+    plate_463 = [r for n in plate_463_names for r in read_study(R, n)[0]]
+    plate_463_cmds = [read_study(R, n)[1] for n in plate_463_names]
+    traction_unified, traction_unified_cmd = read_study(R, "bar-traction-unified")
     subpoints, subpoints_cmd = read_study(R, "column-subpoints", "ddmpm")
     ddmpm_tls, ddmpm_tls_cmd = read_study(R, "column-ddmpm-tls", "ddmpm")
 
@@ -294,7 +305,8 @@ def main():
     otm_groups = by_method(otm_bar)
     convergence_figure(otm_groups, 1.0, os.path.join(R, "bar_otm_convergence.png"),
                        "fixed-ends bar of thesis §4.6.1, T = 1e-3 s, 12 particles per cell (thesis Fig 4.7)")
-    tr_groups = {f"{m} ({mat})": rs for (m, mat), rs in by_method(traction, "material.model").items()}
+    tr_groups = {f"{m} ({mat})": rs
+                 for (m, mat), rs in by_method(traction + traction_unified, "material.model").items()}
     convergence_figure(tr_groups, 1.25, os.path.join(R, "traction_convergence.png"),
                        "bar with a traction at its free end, thesis §4.6.2, T = 0.4 s, 4 particles per cell")
 
@@ -420,14 +432,25 @@ samples per Taylor function) 80 and 160 cells count 234 and 2728 fallbacks, with
 
 ![traction convergence]({rel}/traction_convergence.png)
 
+The unified approach (thesis Algorithm 4: B-splines carried by the body, consistent mass) evaluates each
+particle's basis at its reference position, so no particle ever enters an empty cell and its consistent mass never
+changes. The thesis' claim — BSMPM on 81 nodes stops after 0.3 s, the unified approach completes — holds here:
+BSMPM-USL with the consistent mass on 79 cells (81 functions) stops at t = 0.364 s with J ≤ 0, the unified
+approach on 80 cells reaches T = 0.4 s (both asserted in tests/test_moving_basis.cpp). Its rows are below: with
+the linear-elastic law it converges (u order 1.97) to 1.7e-8 on 160 cells; the neo-Hookean bar stops at 7.9e-7, the
+first-order-in-strain gap between the thesis' neo-Hookean bar and the linear wave solution it is compared with.
+
 {convergence_table(tr_groups, 1.25)}
 
     {traction_cmd}
+    {traction_unified_cmd}
 
 ## 6. Fixed-ends bar of thesis §4.6.1 — Fig 4.7, Table 4.1
 
 E = 4 kPa, ρ = 1 kg/m³, v0 = 0.6 m/s, dt = 1e-5 s, T = 1e-3 s, 12 particles per cell, MUSL, lumped mass
-(tools/scenes/bar-otm.json). The thesis: MPM-P1 second order on coarse grids, losing it to grid crossing; maxent
+(tools/scenes/bar-otm.json); OTM and the unified approach with the consistent mass they are defined with. OTM and
+the unified approach carry the basis with the body (engine: `algorithm.update`; for OTM-maxent the max-ent basis of
+the initial nodes, mapped by the motion, rather than recomputed on the moved nodes — the same for P1). The thesis: MPM-P1 second order on coarse grids, losing it to grid crossing; maxent
 much more accurate than P1, between first and second order; BSMPM third order until a limiting value. Max-ent here
 is the thesis' cubic-spline prior with d_max = 2 (kernels/max_ent.hpp), visiting only the 4 nodes in reach.
 
@@ -444,7 +467,28 @@ a polynomial, and the engine evaluates the basis where it is used, three times p
 
     {otm_bar_cmd}
 
-## 7. Error against run time — which method at which accuracy
+OTM and the unified approach cost what their consistent mass costs, two CG solves per step: BSMPM-USL with the
+lumped mass, with the consistent mass and the unified approach take 0.012, 0.056 and 0.052 s for the 100 steps on
+511 cells (1 thread, medians of 3: `mpm run tools/scenes/bar-otm.json --set grid.cells=[511] --set
+algorithm.update=usl|unified --set algorithm.mass=lumped|consistent --threads 1`). Carrying the basis adds nothing.
+
+The displacement of OTM-maxent and the unified approach stops improving near 3e-10 m on fine grids: that floor is
+the time integration's — it quarters when dt halves (OTM-maxent on 64 cells: 2.8e-10, 7.1e-11, 2.4e-11 at dt,
+dt/2, dt/4), while the stress keeps converging.
+
+## 7. Plate of thesis §4.6.3 — Fig 4.10
+
+B = 0.005 m, E = 10 MPa, ν = 0.3, ρ = 1000 kg/m³, 32×32 cells, 4×4 particles per cell, dt = 1e-4 s, T = 3.5e-3 s
+(tools/scenes/plate-unified.json), USL as in the thesis; OTM and the unified approach with the consistent mass. The
+thesis plots σ11 along x2⁰ ≈ 0.07 m: P1 gives a piecewise-constant profile, MPM-P1's far from the exact one, maxent
+(d_max = 3 for MPM, 2 for OTM) much closer, BSMPM and the unified approach closest. Here d_max = 2 for both (the
+engine's max-ent reaches at most 2 cells), and the stress RMS over all particles stands for the profile:
+
+{convergence_table(by_method(plate_463), 1.0)}
+
+{cmds(plate_463_cmds)}
+
+## 8. Error against run time — which method at which accuracy
 
 ![fronts]({rel}/fronts.png)
 
