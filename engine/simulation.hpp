@@ -65,7 +65,7 @@ template <int Dim>
 using AnyBasis = std::variant<TensorBasis<Dim, UniformAxis<2>>, TensorBasis<Dim, UniformAxis<3>>,
                               TensorBasis<Dim, CoxDeBoorAxis<2>>, TensorBasis<Dim, CoxDeBoorAxis<3>>,
                               TensorBasis<Dim, CoxDeBoorAxis<4>>, TensorBasis<Dim, DualDomainAxis>,
-                              TensorBasis<Dim, MaxEntAxis>>;
+                              TensorBasis<Dim, StencilCached<MaxEntAxis>>>;
 
 /// The basis of a grid; DDMPM's axes also carry the force sub-points per particle (algorithm.ddmpm_subpoints).
 template <int Dim>
@@ -148,12 +148,19 @@ class Simulation {
   void raise_unstable(std::size_t particle, const char* stage) const;
   /// With DDMPM sub-points: every particle shorter than two cells, so its sub-points stay within a cell of it.
   void check_subpoint_reach() const;
+  /// The columns the basis is evaluated at: the positions, or the reference positions for a basis that moves with
+  /// the body.
+  Field basis_field() const;
+  /// Fills the max-ent basis' stencil cache for this step's particle positions (no-op for other bases); with
+  /// `fill` false, empties it.
+  void cache_stencils(bool fill);
   std::array<const double*, Dim> reference_columns() const;
 
   Scene scene_;
   std::unique_ptr<Problem<Dim>> problem_;
   Material material_;
   AnyBasis<Dim> basis_;
+  std::vector<Stencil<Dim, MaxEntAxis::width>> stencil_cache_;  ///< per particle, during a step (cache_stencils)
   ParticleStore<Dim> store_;
   GridState<Dim> grid_;
   CellBins<Dim> bins_;

@@ -249,7 +249,7 @@ AnyBasis<Dim> make_basis(const GridSpec& grid, int ddmpm_subpoints) {
   };
   auto knots = [&](int d) { return KnotVector::open_uniform(p, grid.cells[d], grid.length[d]); };
   if (grid.basis == Basis::maxent)
-    return build([&](int d) { return MaxEntAxis(grid.cells[d], grid.length[d], grid.maxent_dmax); });
+    return build([&](int d) { return StencilCached<MaxEntAxis>(grid.cells[d], grid.length[d], grid.maxent_dmax); });
   if (grid.basis == Basis::ddmpm)
     return build([&](int d) { return DualDomainAxis(grid.cells[d], grid.length[d], ddmpm_subpoints); });
   if (grid.path == BasisPath::fast && p <= 2) {
@@ -389,9 +389,7 @@ void Simulation<Dim>::step() {
   const bool reorder = step_ % reorder_every == 0;
   if (next_step_bins()) {
     std::array<const double*, Dim> x;
-    // a basis that moves with the body is evaluated at the reference positions, which never leave their cells
-    const Field at = basis_moves_with_body(scene_.algorithm.update) ? Field::reference : Field::position;
-    for (int d = 0; d < Dim; ++d) x[d] = store_.column(at, d).data();
+    for (int d = 0; d < Dim; ++d) x[d] = store_.column(basis_field(), d).data();
     bins_.bin(x, store_.size());
     moved_cells_ = 0.0;
   }
@@ -403,11 +401,36 @@ void Simulation<Dim>::step() {
   // a step that throws has moved the particles by an unknown amount: until it returns, bin before the next scatter
   const double moved_before = moved_cells_;
   moved_cells_ = std::numeric_limits<double>::infinity();
+  cache_stencils(true);
   std::visit([&](const auto& basis, const auto& material,
                  const auto& force) { moved_cells_ = moved_before + step_with(basis, material, force, dt); },
              basis_, material_, body);
+  cache_stencils(false);
   ++step_;
   time_ = step_ == steps_total_ ? scene_.time.end : dt_ * step_;
+}
+
+template <int Dim>
+Field Simulation<Dim>::basis_field() const {
+  // a basis that moves with the body is evaluated at the reference positions, which never leave their cells
+  return basis_moves_with_body(scene_.algorithm.update) ? Field::reference : Field::position;
+}
+
+template <int Dim>
+void Simulation<Dim>::cache_stencils(bool fill) {
+  auto* basis = std::get_if<TensorBasis<Dim, StencilCached<MaxEntAxis>>>(&basis_);
+  if (!basis) return;
+  auto& cache = basis->axis[0];
+  cache.cached_x0 = nullptr;  // from here on stencil_of evaluates the axis
+  if (!fill) return;
+  std::array<const double*, Dim> x;
+  for (int d = 0; d < Dim; ++d) x[d] = store_.column(basis_field(), d).data();
+  stencil_cache_.resize(store_.size());
+  parallel_over(store_.size(), particle_grain, [&](std::size_t b, std::size_t e) {
+    for (std::size_t p = b; p < e; ++p) stencil_cache_[p] = stencil_of<Dim, MaxEntAxis::width>(*basis, x, p);
+  });
+  cache.stencils = stencil_cache_.data();
+  cache.cached_x0 = x[0];
 }
 
 template <int Dim>

@@ -131,9 +131,23 @@ MPM_INLINE Stencil<Dim, S> stencil_at(const TensorBasis<Dim, Axis>& basis, const
   return st;
 }
 
+/// An axis whose particle stencils are evaluated once per step and read back by particle index, for a basis that
+/// is costly to evaluate (max-ent: a Newton solve per point), which every transfer of a step would otherwise
+/// evaluate again at the same positions (three times per MUSL step). Simulation::cache_stencils fills the cache
+/// at the start of a step and empties it at the end; points of other columns (Gauss points, loads) are evaluated
+/// by the axis itself.
+template <class Axis>
+struct StencilCached : Axis {
+  using Axis::Axis;
+  const double* cached_x0 = nullptr;  ///< the axis-0 column of the points the cache holds; null: no cache
+  const void* stencils = nullptr;     ///< Stencil<Dim, width>[point], for the Dim of the basis
+};
+
 /// The stencil of point i of the position columns x (one pointer per axis): the prologue of every transfer.
 template <int Dim, int S, class Axis, class Columns>
 MPM_INLINE Stencil<Dim, S> stencil_of(const TensorBasis<Dim, Axis>& basis, const Columns& x, std::size_t i) {
+  if constexpr (requires { basis.axis[0].stencils; })
+    if (x[0] == basis.axis[0].cached_x0) return static_cast<const Stencil<Dim, S>*>(basis.axis[0].stencils)[i];
   double xi[Dim];
   for (int d = 0; d < Dim; ++d) xi[d] = x[d][i];
   return stencil_at<Dim, S>(basis, xi);
