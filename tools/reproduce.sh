@@ -81,5 +81,7 @@ study bar-traction tools/scenes/bar-traction.json --vary 'grid.cells=[20],[40],[
 study bar-traction-unified tools/scenes/bar-traction.json --set algorithm.mass=consistent --vary algorithm.update=unified \
   --vary 'grid.cells=[20],[40],[80],[160]' --vary material.model=neo-hookean,linear-elastic
 
+# thesis Figs 4.6 and 4.8: stress profiles of the chapter-4 methods on the two bars
+/usr/bin/python3 tools/plot_profiles.py --mpm "$MPM" --out "$OUT"
 /usr/bin/python3 tools/results_md.py --results "$OUT" --out docs/RESULTS.md --seconds $(( $(date +%s) - start ))
 echo "wrote docs/RESULTS.md and $OUT/ in $(( $(date +%s) - start )) s"

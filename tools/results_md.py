@@ -440,6 +440,12 @@ approach on 80 cells reaches T = 0.4 s (both asserted in tests/test_moving_basis
 the linear-elastic law it converges (u order 1.97) to 1.7e-8 on 160 cells; the neo-Hookean bar stops at 7.9e-7, the
 first-order-in-strain gap between the thesis' neo-Hookean bar and the linear wave solution it is compared with.
 
+The thesis' Fig 4.8, every method on 85 nodes of the 1.25 m domain, USL, 4 particles per cell (the commands are
+in `tools/plot_profiles.py`): MPM-P1 shows grid-crossing noise near the end; the others follow the exact profile,
+MPM-maxent and BSMPM a little off at the free end, as in the thesis.
+
+![traction profiles]({rel}/profiles_4_6_2.png)
+
 {convergence_table(tr_groups, 1.25)}
 
     {traction_cmd}
@@ -453,6 +459,11 @@ the unified approach carry the basis with the body (engine: `algorithm.update`; 
 the initial nodes, mapped by the motion, rather than recomputed on the moved nodes — the same for P1). The thesis: MPM-P1 second order on coarse grids, losing it to grid crossing; maxent
 much more accurate than P1, between first and second order; BSMPM third order until a limiting value. Max-ent here
 is the thesis' cubic-spline prior with d_max = 2 (kernels/max_ent.hpp), visiting only the 4 nodes in reach.
+
+The thesis' Fig 4.6, σ at T: MPM-P1 on 512 nodes with its grid-crossing noise, OTM-P1 on 512 and the unified
+approach on 32 nodes on the exact profile (`tools/plot_profiles.py`):
+
+![bar 4.6.1 profiles]({rel}/profiles_4_6_1.png)
 
 ![bar 4.6.1 convergence]({rel}/bar_otm_convergence.png)
 
