@@ -48,11 +48,12 @@ void check_cfl(const Simulation<Dim>& sim) {
   const CriticalStep c = sim.critical_step();
   if (sim.dt() <= c.dt) return;
   const auto& s = sim.particles();
-  char buf[640];
+  char buf[720];
   int n = std::snprintf(buf, sizeof buf,
-                        "CFL violated at step %ld (t = %.6g s): dt = %.6g s exceeds the critical step h/(c + |v|) = "
+                        "CFL violated at step %ld (t = %.6g s): dt = %.6g s exceeds the critical step %s = "
                         "%.6g s by a factor %.4g (h = %.4g m); particle %zu at x = (",
-                        sim.steps_done(), sim.time(), sim.dt(), c.dt, sim.dt() / c.dt, c.h, c.particle);
+                        sim.steps_done(), sim.time(), sim.dt(), critical_step_formula(c).c_str(), c.dt,
+                        sim.dt() / c.dt, c.h, c.particle);
   for (int d = 0; d < Dim && n < static_cast<int>(sizeof buf); ++d)
     n += std::snprintf(buf + n, sizeof buf - n, "%s%.6g", d ? ", " : "", s.column(Field::position, d)[c.particle]);
   if (n < static_cast<int>(sizeof buf))

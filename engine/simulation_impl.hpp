@@ -317,7 +317,8 @@ Simulation<Dim>::Simulation(const Scene& scene)
     dt_ = *scene.time.dt;
     if (dt_ > critical.dt) {
       std::ostringstream msg;
-      msg << "scene: time.dt = " << dt_ << ": expected at most the critical step h/(c + |v|) = " << critical.dt
+      msg << "scene: time.dt = " << dt_ << ": expected at most the critical step " << critical_step_formula(critical)
+          << " = " << critical.dt
           << " s of the initial state (cell size " << critical.h << " m; particle " << critical.particle
           << ": wave speed " << critical.wave_speed << " m/s, |v| = " << critical.speed
           << " m/s); use a smaller time.dt or time.cfl";
@@ -771,7 +772,8 @@ CriticalStep Simulation<Dim>::critical_step() const {
         signal_of(mat, f.p, out.wave_speed, out.speed, out.J);
       },
       material_);
-  out.dt = out.h / (out.wave_speed + out.speed);
+  if (scene_.algorithm.mass == MassMatrix::consistent) out.kappa = consistent_mass_step_factor(scene_.grid.basis, Dim);
+  out.dt = out.kappa * out.h / (out.wave_speed + out.speed);
   return out;
 }
 
