@@ -11,7 +11,8 @@ why it failed, the maximum energy drift, the conservation errors, the reconstruc
 
 Methods (columns): MPM-P1 = grid.basis=linear + direct mapping; DDMPM / MPM-maxent = grid.basis=ddmpm / maxent + direct;
 BSMPM = bspline2 + direct; BSMPM-MLS / BSMPM-TLS = bspline2 + algorithm.mapping=mls / tls; each with
-algorithm.update=usl and musl. A run the engine refuses because the
+algorithm.update=usl and musl. OTM-P1 / OTM-maxent / unified: algorithm.update=otm / otm / unified with linear /
+maxent / bspline2 and the consistent mass. A run the engine refuses because the
 method is not built yet (exit 2, "only direct ...") is "n/a"; it starts counting once the engine accepts it.
 
 Outcomes of one run: "ok" (exit 0), "exit 3 @ step N: why" (unstable, the engine's reason), "refused (exit 2)"
@@ -44,15 +45,25 @@ SCENES = os.path.join("tools", "scenes", "stability")
 
 DRIFT_WARN = 0.1  # energy drift that flags a completed run of a case without external work
 
-METHODS = [  # (label, overrides)
-    ("MPM-P1", ["grid.basis=linear", "algorithm.mapping=direct"]),
-    ("DDMPM", ["grid.basis=ddmpm", "algorithm.mapping=direct"]),
-    ("MPM-maxent", ["grid.basis=maxent", "algorithm.mapping=direct"]),
-    ("BSMPM", ["grid.basis=bspline2", "algorithm.mapping=direct"]),
-    ("BSMPM-MLS", ["grid.basis=bspline2", "algorithm.mapping=mls"]),
-    ("BSMPM-TLS", ["grid.basis=bspline2", "algorithm.mapping=tls"]),
-]
 SCHEMES = ["usl", "musl"]
+# the basis carried by the body (thesis Algorithms 3-4): the update is the method, with the consistent mass
+MOVING = ["algorithm.mapping=direct", "algorithm.mass=consistent"]
+METHODS = [  # (label, overrides, schemes)
+    ("MPM-P1", ["grid.basis=linear", "algorithm.mapping=direct"], SCHEMES),
+    ("DDMPM", ["grid.basis=ddmpm", "algorithm.mapping=direct"], SCHEMES),
+    ("MPM-maxent", ["grid.basis=maxent", "algorithm.mapping=direct"], SCHEMES),
+    ("BSMPM", ["grid.basis=bspline2", "algorithm.mapping=direct"], SCHEMES),
+    ("BSMPM-MLS", ["grid.basis=bspline2", "algorithm.mapping=mls"], SCHEMES),
+    ("BSMPM-TLS", ["grid.basis=bspline2", "algorithm.mapping=tls"], SCHEMES),
+    ("OTM-P1", ["grid.basis=linear"] + MOVING, ["otm"]),
+    ("OTM-maxent", ["grid.basis=maxent"] + MOVING, ["otm"]),
+    ("unified", ["grid.basis=bspline2"] + MOVING, ["unified"]),
+]
+
+
+def column_of(method: str, scheme: str) -> str:
+    """A table column: method and scheme, or the method alone where the update is the method (OTM, unified)."""
+    return method if scheme in ("otm", "unified") else f"{method} {scheme.upper()}"
 
 
 # ---------------------------------------------------------------------------------------------------------------
@@ -295,7 +306,7 @@ class Run:
 
     @property
     def column(self) -> str:
-        return f"{self.method} {self.scheme.upper()}"
+        return column_of(self.method, self.scheme)
 
 
 def command(mpm: str, case: Case, method_sets: list[str], scheme: str, summary: str, extra: list[str]) -> list[str]:
@@ -492,7 +503,7 @@ def survival(runs: list[Run], columns: list[str]) -> list[str]:
 
 def render(fams: list[Family], runs: list[Run], argv: list[str], mpm: str, total_s: float, jobs: int,
            conclusions: str) -> str:
-    columns = [f"{m} {s.upper()}" for m, _ in METHODS for s in SCHEMES]
+    columns = [column_of(m, s) for m, _, schemes in METHODS for s in schemes]
     by_key = {(r.case.family, r.case.name, r.column): r for r in runs}
     out = [
         "# Stability suite",
@@ -508,7 +519,8 @@ def render(fams: list[Family], runs: list[Run], argv: list[str], mpm: str, total
         "Columns: **MPM-P1** = `grid.basis=linear`, direct mapping; **DDMPM / MPM-maxent** = `grid.basis=ddmpm / "
         "maxent`, direct; **BSMPM** = `grid.basis=bspline2`, direct; "
         "**BSMPM-MLS / BSMPM-TLS** = bspline2 with `algorithm.mapping=mls / tls`; each with `algorithm.update=usl` "
-        "and `musl`; lumped mass. Each run is `mpm run tools/scenes/stability/SCENE --set <method> "
+        "and `musl`; lumped mass. **OTM-P1 / OTM-maxent** = `algorithm.update=otm` with linear / maxent, **unified** = "
+        "`algorithm.update=unified` with bspline2, both with `algorithm.mass=consistent` (thesis Algorithms 3–4). Each run is `mpm run tools/scenes/stability/SCENE --set <method> "
         "--set algorithm.update=<scheme> --set <case> --threads 1 --summary S.json` (`--list` prints every command).",
         "",
         "Cells: `ok (drift D, gain G, u err U)` — completed; D = max |E(t) − E(0)| / E(0) of kinetic + strain energy "
@@ -593,8 +605,8 @@ def main() -> int:
     runs: list[Run] = []
     for fam in fams:
         for case in fam.cases:
-            for method, msets in METHODS:
-                for scheme in SCHEMES:
+            for method, msets, schemes in METHODS:
+                for scheme in schemes:
                     summary = os.path.join(tmp, f"run{len(runs)}.json")
                     sets = msets + [f"algorithm.update={scheme}"] + case.sets + args.set
                     key = json.dumps(apply_sets(load_scene(case.scene), sets), sort_keys=True)
