@@ -66,5 +66,20 @@ expect 3 "CFL violated at step .* by a factor .*wave speed c = " -- "$mpm" run c
 expect 3 "energy balance violated at step .*external work.*last good state" -- "$mpm" run \
   "$scenes/stability/block-impact.json" --set algorithm.mapping=tls --set algorithm.update=musl --quiet
 [ -f escape.h5 ] && pass=$((pass+1)) || { echo "FAIL: no output after an unstable run"; fail=$((fail+1)); }
+# faults that end cleanly with exit 2 naming what is wrong, before any run
+deep=$(printf '%*s' 100000 '' | tr ' ' '[')
+printf '%s' "$deep" > deep.json
+expect 2 "deep.json: .*nested deeper than" -- "$mpm" run deep.json --quiet
+expect 2 "^--set material.E: nested deeper than" -- "$mpm" validate "$scenes/plate.json" --set "material.E=$deep"
+sed 's/"E": 1.0e7/"E": 1e400/' "$scenes/plate.json" > huge.json
+expect 2 "huge.json: material.E: .*1e400" -- "$mpm" validate huge.json
+expect 2 "^--set material.E = 1e400: expected a finite number" -- "$mpm" validate "$scenes/plate.json" --set material.E=1e400
+mkdir adir
+expect 2 "cannot read adir: is a directory" -- "$mpm" run adir --quiet
+expect 2 "cannot read adir: is a directory" -- "$mpm" validate adir
+expect 2 "^--out = adir: expected a file name, not a directory" -- "$mpm" run "$scenes/plate.json" --out adir --quiet
+expect 2 "^--summary = adir: expected a file name, not a directory" -- "$mpm" run "$scenes/plate.json" --summary adir
+expect 2 "^--summary = nodir/s.json: expected a file in an existing, writable directory" -- \
+  "$mpm" run "$scenes/plate.json" --summary nodir/s.json
 echo "cli: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]
