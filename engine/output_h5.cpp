@@ -210,6 +210,13 @@ std::string snapshot_name(long step) {
   return buf;
 }
 
+// "x0", "x1", "x2": the node coordinates of one axis of the background grid (/xdmf/grid).
+std::string axis_name(int d) {
+  std::string name = "x";  // appended: `"x" + to_string(d)` trips GCC 12's false -Wrestrict
+  name += std::to_string(d);
+  return name;
+}
+
 void check_names(std::span<const ColumnView> columns, const std::string& file, const char* op) {
   std::set<std::string> seen;
   for (const auto& c : columns) {
@@ -290,17 +297,19 @@ class ParaViewFields {
     if (has("F00")) combine("F", {"F00", "F01", "", "F10", has("F11") ? "F11" : "1", "", "", "", "1"});
   }
 
-  /// The XDMF of the geometry and the attributes; `snapshot` and `combined` are the two groups as references.
-  std::string xml(const std::string& snapshot, const std::string& combined) const {
-    const std::string in = "          ";
+  /// The XDMF of the geometry and the attributes; `snapshot` and `combined` are the two groups as references,
+  /// `indent` that of the elements (the data items are indented two more).
+  std::string xml(const std::string& snapshot, const std::string& combined, const std::string& indent) const {
+    const std::string in = indent + "  ";
     auto item = [&](const std::string& ref, std::size_t k) {
       return in + "<DataItem Dimensions=\"" + std::to_string(n_) + (k > 1 ? " " + std::to_string(k) : "") +
              "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" + xml_escape(ref) + "</DataItem>\n";
     };
-    std::string out = "        <Geometry GeometryType=\"XYZ\">\n" + item(combined + "geometry", 3) + "        </Geometry>\n";
+    std::string out = indent + "<Geometry GeometryType=\"XYZ\">\n" + item(combined + "geometry", 3) + indent +
+                      "</Geometry>\n";
     auto attribute = [&](const std::string& name, const char* type, const std::string& data) {
-      out += "        <Attribute Name=\"" + xml_escape(name) + "\" AttributeType=\"" + type + "\" Center=\"Node\">\n" +
-             data + "        </Attribute>\n";
+      out += indent + "<Attribute Name=\"" + xml_escape(name) + "\" AttributeType=\"" + type + "\" Center=\"Node\">\n" +
+             data + indent + "</Attribute>\n";
     };
     for (const auto& [name, k] : fields_)
       if (name != "geometry") attribute(name, k == 3 ? "Vector" : "Tensor", item(combined + name, k));
@@ -421,6 +430,39 @@ struct H5Writer::State {
     return std::max(n, ids_old);  // a continued run may have had more particles
   }
 
+  // The group /xdmf (the data only the sidecar reads), created when first needed.
+  Handle xdmf_group() {
+    return exists(file.get(), "/xdmf", partial)
+               ? own(H5Gopen2(file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('/xdmf')")
+               : create_group(file.get(), "/xdmf", partial);
+  }
+
+  // The background grid (set_grid: node coordinates /xdmf/grid/x0, x1, x2) as a rectilinear mesh named "grid",
+  // its elements indented by `indent`; empty if no grid was set. A 1D grid is a row of nodes at y = 0.
+  std::string background_grid_xml(hid_t xdmf, const std::string& h5, const std::string& indent) {
+    if (!exists(xdmf, "grid", partial)) return {};
+    Handle grid = own(H5Gopen2(xdmf, "grid", H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('/xdmf/grid')");
+    std::vector<hsize_t> nodes;
+    std::string items;
+    for (int d = 0; d < dimension; ++d) {
+      const std::string name = axis_name(d);
+      Handle ds = own(H5Dopen2(grid.get(), name.c_str(), H5P_DEFAULT), H5Dclose, partial,
+                      "H5Dopen2('/xdmf/grid/" + name + "')");
+      nodes.push_back(extent0(ds.get(), partial));
+      items += data_item(h5 + "/xdmf/grid/" + name, nodes.back(), nodes.back(), false, indent + "    ");
+    }
+    if (dimension == 1) items += indent + "    <DataItem Dimensions=\"1\" Format=\"XML\">0</DataItem>\n";
+    // the Dimensions of a RectMesh list the slowest axis first; VXVY(VZ) lists x first
+    std::string dims;
+    for (int d = std::max(dimension, 2) - 1; d >= 0; --d)
+      dims += std::to_string(d < dimension ? nodes[d] : 1) + (d > 0 ? " " : "");
+    const bool three = dimension == 3;
+    return indent + "<Grid Name=\"grid\" GridType=\"Uniform\">\n" + indent + "  <Topology TopologyType=\"" +
+           (three ? "3DRectMesh" : "2DRectMesh") + "\" Dimensions=\"" + dims + "\"/>\n" + indent +
+           "  <Geometry GeometryType=\"" + (three ? "VXVYVZ" : "VXVY") + "\">\n" + items + indent +
+           "  </Geometry>\n" + indent + "</Grid>\n";
+  }
+
   // The sidecar is built from what the file holds (not from what this writer wrote), so it also covers
   // snapshots of an earlier run continued with append().
   std::string build_xdmf() {
@@ -445,33 +487,41 @@ struct H5Writer::State {
       max_n = std::max(max_n, grid.n);
       grids.push_back(std::move(grid));
     }
-    Handle xdmf = exists(file.get(), "/xdmf", partial)
-                      ? own(H5Gopen2(file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('/xdmf')")
-                      : create_group(file.get(), "/xdmf", partial);
+    Handle xdmf = xdmf_group();
     const hsize_t ids_size = max_n > 0 ? write_xdmf_ids(xdmf.get(), max_n) : 0;
 
     // Relative reference by the final name, so the pair of files can be moved together.
     const std::string h5 = fs::path(path).filename().string() + ":";
+    // ParaView's default reader shows one top-level grid only: with a background grid, each time step is a
+    // spatial collection of the particles and the grid.
+    const std::string mesh = background_grid_xml(xdmf.get(), h5, "        ");
     std::ostringstream x;
     x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
-      << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+      << "    <Grid Name=\"run\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     for (const auto& g : grids) {
       if (g.n == 0) {  // Xdmf3 (ParaView's reader) fails on empty grids, so an empty snapshot is only noted
         x << "      <!-- snapshot " << g.name << " at t = " << shortest(g.time) << " has no particles -->\n";
         continue;
       }
-      const std::string in = "          ";
-      x << "      <Grid Name=\"" << g.name << "\" GridType=\"Uniform\">\n"
-        << "        <Time Value=\"" << shortest(g.time) << "\"/>\n";
-      x << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << g.n << "\" NodesPerElement=\"1\">\n"
-        << data_item(h5 + "/xdmf/ids", g.n, ids_size, true, in) << "        </Topology>\n";
+      const std::string time = "<Time Value=\"" + shortest(g.time) + "\"/>\n";
+      std::string in = "        ";  // the particles' elements
+      if (mesh.empty()) {
+        x << "      <Grid Name=\"" << g.name << "\" GridType=\"Uniform\">\n        " << time;
+      } else {
+        x << "      <Grid Name=\"" << g.name << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n        "
+          << time << "        <Grid Name=\"particles\" GridType=\"Uniform\">\n";
+        in += "  ";
+      }
+      x << in << "<Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << g.n << "\" NodesPerElement=\"1\">\n"
+        << data_item(h5 + "/xdmf/ids", g.n, ids_size, true, in + "  ") << in << "</Topology>\n";
       Handle snapshot = own(H5Gopen2(snaps.get(), g.name.c_str(), H5P_DEFAULT), H5Gclose, partial, "H5Gopen2");
       const std::string combined_path = "/xdmf/" + g.name;
       Handle combined = exists(xdmf.get(), g.name, partial)
                             ? own(H5Gopen2(xdmf.get(), g.name.c_str(), H5P_DEFAULT), H5Gclose, partial, "H5Gopen2")
                             : create_group(xdmf.get(), g.name, partial);
       const ParaViewFields fields(snapshot.get(), combined.get(), g.columns, g.n, partial);
-      x << fields.xml(h5 + "/snapshots/" + g.name + "/", h5 + combined_path + "/");
+      x << fields.xml(h5 + "/snapshots/" + g.name + "/", h5 + combined_path + "/", in);
+      if (!mesh.empty()) x << "        </Grid>\n" << mesh;
       x << "      </Grid>\n";
     }
     x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
@@ -592,6 +642,20 @@ void H5Writer::write_snapshot(long step, double time, std::span<const ColumnView
   write_int(g.get(), "step", step, s.partial);
   write_double(g.get(), "time", time, s.partial);
   for (const auto& c : columns) write_column(g.get(), c, s.partial);
+}
+
+void H5Writer::set_grid(std::span<const std::vector<double>> nodes) {
+  State& s = live("set_grid");
+  if (nodes.size() != static_cast<std::size_t>(s.dimension))
+    throw OutputError("'" + s.path + "': set_grid: " + std::to_string(nodes.size()) + " axes for a " +
+                      std::to_string(s.dimension) + "D run");
+  for (const auto& axis : nodes)
+    if (axis.empty()) throw OutputError("'" + s.path + "': set_grid: an axis without nodes");
+  Handle xdmf = s.xdmf_group();
+  remove_link(xdmf.get(), "grid", s.partial);  // a continued run sets it again
+  Handle g = create_group(xdmf.get(), "grid", s.partial);
+  for (std::size_t d = 0; d < nodes.size(); ++d)
+    write_column(g.get(), {axis_name(static_cast<int>(d)), nodes[d]}, s.partial);
 }
 
 void H5Writer::write_checkpoint(long step, double time, std::span<const ColumnView> columns,

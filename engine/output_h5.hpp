@@ -7,7 +7,9 @@
 //   /metrics           float64 (rows, ncols), extendible; attribute "columns" = the column names
 //   /snapshots/NNNNNN  one group per snapshot (zero-padded step); attributes step, time; one float64 column each
 //   /checkpoint        the latest restartable state; attributes step, time and named scalars; one column each
-//   /xdmf/ids, zeros   helper data for the sidecar only (vertex connectivity, and the missing y of 1D runs)
+//   /xdmf              data for the sidecar only: ids (vertex connectivity), <step>/{geometry, velocity,
+//                      displacement, stress, F} (the columns combined for ParaView) and grid/x0, x1 (, x2): the
+//                      node coordinates of the background grid (set_grid)
 //
 // Crash safety comes from the name, not from HDF5: the file is written as `<path>.partial` and renamed to
 // `<path>` only when it is complete, so `<path>` is never a half-written file. The HDF5 C API stays out of this
@@ -61,6 +63,10 @@ class H5Writer {
   /// time and one chunked, shuffled, deflated float64 dataset per column. All columns have the particle count.
   /// Columns x0, x1 (, x2) are the positions the XDMF sidecar uses as geometry; the others become XDMF attributes.
   void write_snapshot(long step, double time, std::span<const ColumnView> columns);
+  /// Node coordinates of the background grid, one vector per axis (as many axes as the run's dimension), written
+  /// to /xdmf/grid; the sidecar then shows the grid beside the particles in every time step. Replaces an earlier
+  /// grid (a continued run sets it again).
+  void set_grid(std::span<const std::vector<double>> nodes);
   /// Writes/overwrites group /checkpoint with attributes step, time, the given columns (any lengths) and the named
   /// scalar attributes; then flushes the file (H5Fflush) so the .partial file is valid after each call.
   void write_checkpoint(long step, double time, std::span<const ColumnView> columns,

@@ -254,7 +254,14 @@ RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, co
                                         "mass_rel_max", "momentum_rel_max"};
   if (sim.has_exact())
     for (const char* e : {"displacement_rms", "velocity_rms", "stress_rms"}) metric_names.push_back(e);
-  if (out) out->set_metric_names(metric_names);
+  if (out) {
+    out->set_metric_names(metric_names);
+    std::vector<std::vector<double>> nodes(Dim);  // the knots of the uniform grid on [0, length], for the sidecar
+    for (int d = 0; d < Dim; ++d)
+      for (int i = 0; i <= scene.grid.cells[d]; ++i)
+        nodes[d].push_back(scene.grid.length[d] * i / scene.grid.cells[d]);
+    out->set_grid(nodes);
+  }
 
   const double tolerance = scene.time.energy_tolerance;
   EnergyBalance balance(tolerance, sim.energy().total(), sim.external_power(), sim.time());
