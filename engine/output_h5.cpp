@@ -3,7 +3,9 @@
 
 #include "engine/h5_handle.hpp"
 
+#include <fcntl.h>
 #include <hdf5.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <charconv>
@@ -333,7 +335,11 @@ void write_text_atomically(const std::string& path, const std::string& text) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << text;
     out.close();
-    if (!out) throw OutputError("cannot write '" + tmp + "'");
+    if (!out) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw OutputError("cannot write '" + tmp + "'");
+    }
   }
   std::error_code ec;
   fs::rename(tmp, path, ec);
@@ -365,6 +371,35 @@ struct H5Writer::State {
   hsize_t rows_in_file = 0;
   hsize_t chunk_rows = 1;
   bool closed = false;
+  bool continued = false;  // append(): `path` holds the run this one continues
+
+  // Runs a write. One that fails (full disk, file size limit) leaves the .partial file unusable: every handle is
+  // closed, the file is removed, nothing is renamed into place, and the message adds what that costs. Closing
+  // flushes what HDF5 still buffers, which fails again on a full disk and leaves the file half-closed in HDF5
+  // (its exit handler then crashed); the file is dropped anyway, so those last writes go to /dev/null.
+  template <class Write>
+  void guard(Write&& write) {
+    try {
+      write();
+    } catch (const OutputError& e) {
+      closed = true;
+      void* fd = nullptr;
+      if (file.valid() && H5Fget_vfd_handle(file.get(), H5P_DEFAULT, &fd) >= 0 && fd) {
+        const int null = ::open("/dev/null", O_WRONLY);
+        if (null >= 0) {
+          ::dup2(null, *static_cast<int*>(fd));
+          ::close(null);
+        }
+      }
+      metrics.reset();
+      file.reset();
+      std::error_code ec;
+      fs::remove(partial, ec);
+      throw OutputError(std::string(e.what()) + "; " +
+                        (continued ? "'" + path + "' is kept as it was before this run (this run's steps are lost)"
+                                   : "nothing was saved ('" + path + "' was not written)"));
+    }
+  }
 
   void open_metrics() {
     metrics = own(H5Dopen2(file.get(), "/metrics", H5P_DEFAULT), H5Dclose, partial, "H5Dopen2('/metrics')");
@@ -549,9 +584,11 @@ H5Writer::H5Writer(std::string path, const std::string& scene_json, int dimensio
   Handle fapl = file_access(s.partial);
   s.file = own(H5Fcreate(s.partial.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose, s.partial,
                "H5Fcreate (the run file for '" + s.path + "')");
-  write_strings(s.file.get(), "scene", {scene_json}, true, s.partial);
-  write_int(s.file.get(), "dimension", dimension, s.partial);
-  create_group(s.file.get(), "/snapshots", s.partial);
+  s.guard([&] {
+    write_strings(s.file.get(), "scene", {scene_json}, true, s.partial);
+    write_int(s.file.get(), "dimension", dimension, s.partial);
+    create_group(s.file.get(), "/snapshots", s.partial);
+  });
 }
 
 H5Writer H5Writer::append(std::string path) {
@@ -560,19 +597,32 @@ H5Writer H5Writer::append(std::string path) {
   s->path = std::move(path);
   s->partial = s->path + ".partial";
   std::error_code ec;
-  if (fs::exists(s->path, ec)) {
-    // Work on a copy: the complete file stays in place until close() replaces it.
-    fs::copy_file(s->path, s->partial, fs::copy_options::overwrite_existing, ec);
-    if (ec) throw OutputError("cannot copy '" + s->path + "' to '" + s->partial + "': " + ec.message());
-  } else if (!fs::exists(s->partial, ec)) {
-    throw OutputError("cannot continue '" + s->path + "': neither it nor its .partial file exists");
+  if (!fs::exists(s->path, ec) && fs::exists(s->partial, ec)) {
+    // a killed run: its .partial file (valid up to its last checkpoint) becomes the file kept if this run fails
+    fs::rename(s->partial, s->path, ec);
+    if (ec) throw OutputError("cannot rename '" + s->partial + "' to '" + s->path + "': " + ec.message());
   }
+  if (!fs::exists(s->path, ec))
+    throw OutputError("cannot continue '" + s->path + "': neither it nor its .partial file exists");
+  // Work on a copy: the complete file stays in place until close() replaces it.
+  fs::copy_file(s->path, s->partial, fs::copy_options::overwrite_existing, ec);
+  if (ec) {
+    const std::string why = ec.message();
+    fs::remove(s->partial, ec);
+    throw OutputError("cannot copy '" + s->path + "' to '" + s->partial + "': " + why + "; '" + s->path +
+                      "' is kept as it was");
+  }
+  s->continued = true;
   Handle fapl = file_access(s->partial);
   s->file = own(H5Fopen(s->partial.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose, s->partial, "H5Fopen (append)");
-  s->dimension = static_cast<int>(read_number(s->file.get(), "dimension", s->partial));
-  if (exists(s->file.get(), "/metrics", s->partial)) s->open_metrics();
-  if (!exists(s->file.get(), "/snapshots", s->partial)) create_group(s->file.get(), "/snapshots", s->partial);
-  remove_link(s->file.get(), kCheckpointTmp, s->partial);  // left over if the earlier run died mid-checkpoint
+  State& state = *s;
+  state.guard([&] {
+    state.dimension = static_cast<int>(read_number(state.file.get(), "dimension", state.partial));
+    if (exists(state.file.get(), "/metrics", state.partial)) state.open_metrics();
+    if (!exists(state.file.get(), "/snapshots", state.partial))
+      create_group(state.file.get(), "/snapshots", state.partial);
+    remove_link(state.file.get(), kCheckpointTmp, state.partial);  // left over if the earlier run died mid-checkpoint
+  });
   return H5Writer(std::move(s));
 }
 
@@ -602,19 +652,21 @@ void H5Writer::set_metric_names(std::vector<std::string> names) {
     throw OutputError("'" + s.path + "': set_metric_names: the metrics table already has other columns");
   }
   if (names.empty()) throw OutputError("'" + s.path + "': set_metric_names: no column names");
-  const hsize_t ncols = names.size();
-  s.chunk_rows = std::max<hsize_t>(1, kMetricsChunkValues / ncols);
-  const hsize_t dims[2] = {0, ncols}, maxdims[2] = {H5S_UNLIMITED, ncols}, chunk[2] = {s.chunk_rows, ncols};
-  Handle space = own(H5Screate_simple(2, dims, maxdims), H5Sclose, s.partial, "H5Screate_simple");
-  Handle dcpl = own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, s.partial, "H5Pcreate");
-  check(H5Pset_chunk(dcpl.get(), 2, chunk), s.partial, "H5Pset_chunk");
-  check(H5Pset_deflate(dcpl.get(), 1), s.partial, "H5Pset_deflate");  // a part-filled chunk then costs little
-  s.metrics = own(H5Dcreate2(s.file.get(), "/metrics", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(),
-                             H5P_DEFAULT),
-                  H5Dclose, s.partial, "H5Dcreate2('/metrics')");
-  write_strings(s.metrics.get(), "columns", names, false, s.partial);
-  s.metric_names = std::move(names);
-  s.rows_in_file = 0;
+  s.guard([&] {
+    const hsize_t ncols = names.size();
+    s.chunk_rows = std::max<hsize_t>(1, kMetricsChunkValues / ncols);
+    const hsize_t dims[2] = {0, ncols}, maxdims[2] = {H5S_UNLIMITED, ncols}, chunk[2] = {s.chunk_rows, ncols};
+    Handle space = own(H5Screate_simple(2, dims, maxdims), H5Sclose, s.partial, "H5Screate_simple");
+    Handle dcpl = own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, s.partial, "H5Pcreate");
+    check(H5Pset_chunk(dcpl.get(), 2, chunk), s.partial, "H5Pset_chunk");
+    check(H5Pset_deflate(dcpl.get(), 1), s.partial, "H5Pset_deflate");  // a part-filled chunk then costs little
+    s.metrics = own(H5Dcreate2(s.file.get(), "/metrics", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(),
+                               H5P_DEFAULT),
+                    H5Dclose, s.partial, "H5Dcreate2('/metrics')");
+    write_strings(s.metrics.get(), "columns", names, false, s.partial);
+    s.metric_names = std::move(names);
+    s.rows_in_file = 0;
+  });
 }
 
 void H5Writer::add_metrics(std::span<const double> row) {
@@ -624,7 +676,7 @@ void H5Writer::add_metrics(std::span<const double> row) {
     throw OutputError("'" + s.path + "': add_metrics: row has " + std::to_string(row.size()) +
                       " values, the table has " + std::to_string(s.metric_names.size()) + " columns");
   s.pending.insert(s.pending.end(), row.begin(), row.end());
-  if (s.pending.size() / s.metric_names.size() >= s.chunk_rows) s.flush_metrics();
+  if (s.pending.size() / s.metric_names.size() >= s.chunk_rows) s.guard([&] { s.flush_metrics(); });
 }
 
 void H5Writer::write_snapshot(long step, double time, std::span<const ColumnView> columns) {
@@ -636,12 +688,14 @@ void H5Writer::write_snapshot(long step, double time, std::span<const ColumnView
       throw OutputError("'" + s.path + "': write_snapshot: column '" + c.name + "' has " +
                         std::to_string(c.values.size()) + " values, '" + columns.front().name + "' has " +
                         std::to_string(columns.front().values.size()));
-  const std::string name = "/snapshots/" + snapshot_name(step);
-  remove_link(s.file.get(), name, s.partial);  // the same step again (e.g. after resume) replaces it
-  Handle g = create_group(s.file.get(), name, s.partial);
-  write_int(g.get(), "step", step, s.partial);
-  write_double(g.get(), "time", time, s.partial);
-  for (const auto& c : columns) write_column(g.get(), c, s.partial);
+  s.guard([&] {
+    const std::string name = "/snapshots/" + snapshot_name(step);
+    remove_link(s.file.get(), name, s.partial);  // the same step again (e.g. after resume) replaces it
+    Handle g = create_group(s.file.get(), name, s.partial);
+    write_int(g.get(), "step", step, s.partial);
+    write_double(g.get(), "time", time, s.partial);
+    for (const auto& c : columns) write_column(g.get(), c, s.partial);
+  });
 }
 
 void H5Writer::set_grid(std::span<const std::vector<double>> nodes) {
@@ -651,11 +705,13 @@ void H5Writer::set_grid(std::span<const std::vector<double>> nodes) {
                       std::to_string(s.dimension) + "D run");
   for (const auto& axis : nodes)
     if (axis.empty()) throw OutputError("'" + s.path + "': set_grid: an axis without nodes");
-  Handle xdmf = s.xdmf_group();
-  remove_link(xdmf.get(), "grid", s.partial);  // a continued run sets it again
-  Handle g = create_group(xdmf.get(), "grid", s.partial);
-  for (std::size_t d = 0; d < nodes.size(); ++d)
-    write_column(g.get(), {axis_name(static_cast<int>(d)), nodes[d]}, s.partial);
+  s.guard([&] {
+    Handle xdmf = s.xdmf_group();
+    remove_link(xdmf.get(), "grid", s.partial);  // a continued run sets it again
+    Handle g = create_group(xdmf.get(), "grid", s.partial);
+    for (std::size_t d = 0; d < nodes.size(); ++d)
+      write_column(g.get(), {axis_name(static_cast<int>(d)), nodes[d]}, s.partial);
+  });
 }
 
 void H5Writer::write_checkpoint(long step, double time, std::span<const ColumnView> columns,
@@ -667,62 +723,69 @@ void H5Writer::write_checkpoint(long step, double time, std::span<const ColumnVi
     if (name.empty() || !seen.insert(name).second)
       throw OutputError("'" + s.path + "': write_checkpoint: scalar name '" + name +
                         "' is empty, reserved or repeated");
-  s.flush_metrics();  // the metrics belong to the state being saved
-  // Build the new checkpoint beside the old one and swap it in by links, so the old one is never half-replaced.
-  remove_link(s.file.get(), kCheckpointTmp, s.partial);
-  {
-    Handle g = create_group(s.file.get(), kCheckpointTmp, s.partial);
-    write_int(g.get(), "step", step, s.partial);
-    write_double(g.get(), "time", time, s.partial);
-    for (const auto& [name, value] : scalars) write_double(g.get(), name, value, s.partial);
-    for (const auto& c : columns) write_column(g.get(), c, s.partial);
-  }
-  remove_link(s.file.get(), "/checkpoint", s.partial);
-  check(H5Lmove(s.file.get(), kCheckpointTmp, s.file.get(), "/checkpoint", H5P_DEFAULT, H5P_DEFAULT), s.partial,
-        "H5Lmove('/checkpoint')");
-  check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+  s.guard([&] {
+    s.flush_metrics();  // the metrics belong to the state being saved
+    // Build the new checkpoint beside the old one and swap it in by links, so the old one is never half-replaced.
+    remove_link(s.file.get(), kCheckpointTmp, s.partial);
+    {
+      Handle g = create_group(s.file.get(), kCheckpointTmp, s.partial);
+      write_int(g.get(), "step", step, s.partial);
+      write_double(g.get(), "time", time, s.partial);
+      for (const auto& [name, value] : scalars) write_double(g.get(), name, value, s.partial);
+      for (const auto& c : columns) write_column(g.get(), c, s.partial);
+    }
+    remove_link(s.file.get(), "/checkpoint", s.partial);
+    check(H5Lmove(s.file.get(), kCheckpointTmp, s.file.get(), "/checkpoint", H5P_DEFAULT, H5P_DEFAULT), s.partial,
+          "H5Lmove('/checkpoint')");
+    check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+  });
 }
 
 void H5Writer::set_attribute(const std::string& name, const std::string& value) {
   State& s = live("set_attribute");
-  write_strings(s.file.get(), name, {value}, true, s.partial);
+  s.guard([&] { write_strings(s.file.get(), name, {value}, true, s.partial); });
 }
 
 void H5Writer::discard_after(long step, double time) {
   State& s = live("discard_after");
-  s.flush_metrics();
-  Handle snaps = own(H5Gopen2(s.file.get(), "/snapshots", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/snapshots')");
-  // the snapshots after `step`, and their ParaView datasets (/xdmf/<step>, ParaViewFields)
-  auto drop_after = [&](hid_t group) {
-    for (const auto& name : link_names(group, s.partial)) {
-      long long n = -1;
-      const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), n);
-      if (ec == std::errc() && end == name.data() + name.size() && n > step)
-        check(H5Ldelete(group, name.c_str(), H5P_DEFAULT), s.partial, "H5Ldelete('" + name + "')");
+  s.guard([&] {
+    s.flush_metrics();
+    Handle snaps =
+        own(H5Gopen2(s.file.get(), "/snapshots", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/snapshots')");
+    // the snapshots after `step`, and their ParaView datasets (/xdmf/<step>, ParaViewFields)
+    auto drop_after = [&](hid_t group) {
+      for (const auto& name : link_names(group, s.partial)) {
+        long long n = -1;
+        const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), n);
+        if (ec == std::errc() && end == name.data() + name.size() && n > step)
+          check(H5Ldelete(group, name.c_str(), H5P_DEFAULT), s.partial, "H5Ldelete('" + name + "')");
+      }
+    };
+    drop_after(snaps.get());
+    if (exists(s.file.get(), "/xdmf", s.partial)) {
+      Handle xdmf = own(H5Gopen2(s.file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/xdmf')");
+      drop_after(xdmf.get());
     }
-  };
-  drop_after(snaps.get());
-  if (exists(s.file.get(), "/xdmf", s.partial)) {
-    Handle xdmf = own(H5Gopen2(s.file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/xdmf')");
-    drop_after(xdmf.get());
-  }
-  const auto t = std::find(s.metric_names.begin(), s.metric_names.end(), "t");
-  if (!s.metrics.valid() || t == s.metric_names.end()) return;
-  const std::size_t ncols = s.metric_names.size(), col = static_cast<std::size_t>(t - s.metric_names.begin());
-  const auto values = read_all(s.metrics.get(), s.partial, "/metrics");
-  hsize_t keep = 0;
-  while (keep < s.rows_in_file && !(values[keep * ncols + col] > time)) ++keep;
-  if (keep < s.rows_in_file) {
-    const hsize_t dims[2] = {keep, ncols};
-    check(H5Dset_extent(s.metrics.get(), dims), s.partial, "H5Dset_extent('/metrics')");
-    s.rows_in_file = keep;
-  }
+    const auto t = std::find(s.metric_names.begin(), s.metric_names.end(), "t");
+    if (!s.metrics.valid() || t == s.metric_names.end()) return;
+    const std::size_t ncols = s.metric_names.size(), col = static_cast<std::size_t>(t - s.metric_names.begin());
+    const auto values = read_all(s.metrics.get(), s.partial, "/metrics");
+    hsize_t keep = 0;
+    while (keep < s.rows_in_file && !(values[keep * ncols + col] > time)) ++keep;
+    if (keep < s.rows_in_file) {
+      const hsize_t dims[2] = {keep, ncols};
+      check(H5Dset_extent(s.metrics.get(), dims), s.partial, "H5Dset_extent('/metrics')");
+      s.rows_in_file = keep;
+    }
+  });
 }
 
 void H5Writer::flush() {
   State& s = live("flush");
-  s.flush_metrics();
-  check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+  s.guard([&] {
+    s.flush_metrics();
+    check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+  });
 }
 
 void H5Writer::close() {
@@ -730,10 +793,15 @@ void H5Writer::close() {
   quiet();
   State& s = *s_;
   s.closed = true;  // whatever happens below, do not try again from the destructor
-  s.flush_metrics();
-  const std::string xdmf = s.build_xdmf();
-  s.metrics.reset();
-  check(H5Fclose(s.file.release()), s.partial, "H5Fclose");  // its result matters: this is the final flush
+  std::string xdmf;
+  s.guard([&] {
+    s.flush_metrics();
+    xdmf = s.build_xdmf();
+    s.metrics.reset();
+    // flushed while the file is still open, so that a failure here finds it open (State::guard)
+    check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+    s.file.close(s.partial);  // its result matters: this is the final flush
+  });
   std::error_code ec;
   fs::rename(s.partial, s.path, ec);
   if (ec) throw OutputError("cannot rename '" + s.partial + "' to '" + s.path + "': " + ec.message());

@@ -43,7 +43,8 @@ class H5Writer {
   /// Creates `<path>.partial` (truncating a leftover one) with the root attributes "scene" and "dimension".
   H5Writer(std::string path, const std::string& scene_json, int dimension);
   /// Continues an existing run file (resume): copies `<path>` to `<path>.partial` and opens that for writing, so
-  /// `<path>` stays intact until close(). If only `<path>.partial` exists (a killed run), continues that one.
+  /// `<path>` stays intact until close(). If only `<path>.partial` exists (a killed run), it is renamed to `<path>`
+  /// first and continued the same way, so it is kept if the continued run fails.
   static H5Writer append(std::string path);
 
   H5Writer(H5Writer&&) noexcept;
@@ -51,6 +52,8 @@ class H5Writer {
   H5Writer(const H5Writer&) = delete;
   H5Writer& operator=(const H5Writer&) = delete;
   /// If close() was not called: flush + close + rename anyway (a failed run keeps its data); never throws.
+  /// A write that failed (OutputError from any method that writes, e.g. on a full disk) has already closed the
+  /// writer and removed `<path>.partial`: its message names the file and says what was lost.
   ~H5Writer();
 
   /// Column names of the metrics table, e.g. {"t","mass","momentum_x",...}; call once before add_metrics.
