@@ -815,6 +815,8 @@ const std::string& H5Writer::path() const {
 
 // ---- free functions -------------------------------------------------------------------------------------------
 
+void skip_hdf5_exit_handler() { H5dont_atexit(); }
+
 std::string xdmf_path(const std::string& h5_path) {
   const std::string ext = ".h5";
   const bool h5 = h5_path.size() > ext.size() && h5_path.compare(h5_path.size() - ext.size(), ext.size(), ext) == 0;

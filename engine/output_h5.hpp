@@ -94,6 +94,11 @@ class H5Writer {
   std::unique_ptr<State> s_;
 };
 
+/// For a program's main(), before anything touches HDF5: no HDF5 clean-up at exit. After a write failed on a full
+/// disk HDF5 may hold a file it could not close, and its exit handler crashes on it (SIGSEGV); the run file is
+/// removed by then (H5Writer), so there is nothing left for that handler to flush.
+void skip_hdf5_exit_handler();
+
 /// The XDMF sidecar of a run file: `<path minus .h5>.xdmf` (or `<path>.xdmf` if it does not end in .h5).
 std::string xdmf_path(const std::string& h5_path);
 

@@ -12,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "engine/output_h5.hpp"
 #include "engine/run.hpp"
 #include "engine/scene.hpp"
 #include "engine/study.hpp"
@@ -67,6 +68,7 @@ void print_report(const nlohmann::json& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  mpm::skip_hdf5_exit_handler();
   CLI::App app{"mpm: B-spline material point method with conservative least-squares reconstruction"};
   app.require_subcommand(1);
 
