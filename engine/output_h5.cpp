@@ -3,7 +3,9 @@
 
 #include "engine/h5_handle.hpp"
 
+#include <fcntl.h>
 #include <hdf5.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <charconv>
@@ -210,6 +212,13 @@ std::string snapshot_name(long step) {
   return buf;
 }
 
+// "x0", "x1", "x2": the node coordinates of one axis of the background grid (/xdmf/grid).
+std::string axis_name(int d) {
+  std::string name = "x";  // appended: `"x" + to_string(d)` trips GCC 12's false -Wrestrict
+  name += std::to_string(d);
+  return name;
+}
+
 void check_names(std::span<const ColumnView> columns, const std::string& file, const char* op) {
   std::set<std::string> seen;
   for (const auto& c : columns) {
@@ -290,17 +299,19 @@ class ParaViewFields {
     if (has("F00")) combine("F", {"F00", "F01", "", "F10", has("F11") ? "F11" : "1", "", "", "", "1"});
   }
 
-  /// The XDMF of the geometry and the attributes; `snapshot` and `combined` are the two groups as references.
-  std::string xml(const std::string& snapshot, const std::string& combined) const {
-    const std::string in = "          ";
+  /// The XDMF of the geometry and the attributes; `snapshot` and `combined` are the two groups as references,
+  /// `indent` that of the elements (the data items are indented two more).
+  std::string xml(const std::string& snapshot, const std::string& combined, const std::string& indent) const {
+    const std::string in = indent + "  ";
     auto item = [&](const std::string& ref, std::size_t k) {
       return in + "<DataItem Dimensions=\"" + std::to_string(n_) + (k > 1 ? " " + std::to_string(k) : "") +
              "\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">" + xml_escape(ref) + "</DataItem>\n";
     };
-    std::string out = "        <Geometry GeometryType=\"XYZ\">\n" + item(combined + "geometry", 3) + "        </Geometry>\n";
+    std::string out = indent + "<Geometry GeometryType=\"XYZ\">\n" + item(combined + "geometry", 3) + indent +
+                      "</Geometry>\n";
     auto attribute = [&](const std::string& name, const char* type, const std::string& data) {
-      out += "        <Attribute Name=\"" + xml_escape(name) + "\" AttributeType=\"" + type + "\" Center=\"Node\">\n" +
-             data + "        </Attribute>\n";
+      out += indent + "<Attribute Name=\"" + xml_escape(name) + "\" AttributeType=\"" + type + "\" Center=\"Node\">\n" +
+             data + indent + "</Attribute>\n";
     };
     for (const auto& [name, k] : fields_)
       if (name != "geometry") attribute(name, k == 3 ? "Vector" : "Tensor", item(combined + name, k));
@@ -324,7 +335,11 @@ void write_text_atomically(const std::string& path, const std::string& text) {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << text;
     out.close();
-    if (!out) throw OutputError("cannot write '" + tmp + "'");
+    if (!out) {
+      std::error_code ec;
+      fs::remove(tmp, ec);
+      throw OutputError("cannot write '" + tmp + "'");
+    }
   }
   std::error_code ec;
   fs::rename(tmp, path, ec);
@@ -356,6 +371,35 @@ struct H5Writer::State {
   hsize_t rows_in_file = 0;
   hsize_t chunk_rows = 1;
   bool closed = false;
+  bool continued = false;  // append(): `path` holds the run this one continues
+
+  // Runs a write. One that fails (full disk, file size limit) leaves the .partial file unusable: every handle is
+  // closed, the file is removed, nothing is renamed into place, and the message adds what that costs. Closing
+  // flushes what HDF5 still buffers, which fails again on a full disk and leaves the file half-closed in HDF5
+  // (its exit handler then crashed); the file is dropped anyway, so those last writes go to /dev/null.
+  template <class Write>
+  void guard(Write&& write) {
+    try {
+      write();
+    } catch (const OutputError& e) {
+      closed = true;
+      void* fd = nullptr;
+      if (file.valid() && H5Fget_vfd_handle(file.get(), H5P_DEFAULT, &fd) >= 0 && fd) {
+        const int null = ::open("/dev/null", O_WRONLY);
+        if (null >= 0) {
+          ::dup2(null, *static_cast<int*>(fd));
+          ::close(null);
+        }
+      }
+      metrics.reset();
+      file.reset();
+      std::error_code ec;
+      fs::remove(partial, ec);
+      throw OutputError(std::string(e.what()) + "; " +
+                        (continued ? "'" + path + "' is kept as it was before this run (this run's steps are lost)"
+                                   : "nothing was saved ('" + path + "' was not written)"));
+    }
+  }
 
   void open_metrics() {
     metrics = own(H5Dopen2(file.get(), "/metrics", H5P_DEFAULT), H5Dclose, partial, "H5Dopen2('/metrics')");
@@ -421,6 +465,39 @@ struct H5Writer::State {
     return std::max(n, ids_old);  // a continued run may have had more particles
   }
 
+  // The group /xdmf (the data only the sidecar reads), created when first needed.
+  Handle xdmf_group() {
+    return exists(file.get(), "/xdmf", partial)
+               ? own(H5Gopen2(file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('/xdmf')")
+               : create_group(file.get(), "/xdmf", partial);
+  }
+
+  // The background grid (set_grid: node coordinates /xdmf/grid/x0, x1, x2) as a rectilinear mesh named "grid",
+  // its elements indented by `indent`; empty if no grid was set. A 1D grid is a row of nodes at y = 0.
+  std::string background_grid_xml(hid_t xdmf, const std::string& h5, const std::string& indent) {
+    if (!exists(xdmf, "grid", partial)) return {};
+    Handle grid = own(H5Gopen2(xdmf, "grid", H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('/xdmf/grid')");
+    std::vector<hsize_t> nodes;
+    std::string items;
+    for (int d = 0; d < dimension; ++d) {
+      const std::string name = axis_name(d);
+      Handle ds = own(H5Dopen2(grid.get(), name.c_str(), H5P_DEFAULT), H5Dclose, partial,
+                      "H5Dopen2('/xdmf/grid/" + name + "')");
+      nodes.push_back(extent0(ds.get(), partial));
+      items += data_item(h5 + "/xdmf/grid/" + name, nodes.back(), nodes.back(), false, indent + "    ");
+    }
+    if (dimension == 1) items += indent + "    <DataItem Dimensions=\"1\" Format=\"XML\">0</DataItem>\n";
+    // the Dimensions of a RectMesh list the slowest axis first; VXVY(VZ) lists x first
+    std::string dims;
+    for (int d = std::max(dimension, 2) - 1; d >= 0; --d)
+      dims += std::to_string(d < dimension ? nodes[d] : 1) + (d > 0 ? " " : "");
+    const bool three = dimension == 3;
+    return indent + "<Grid Name=\"grid\" GridType=\"Uniform\">\n" + indent + "  <Topology TopologyType=\"" +
+           (three ? "3DRectMesh" : "2DRectMesh") + "\" Dimensions=\"" + dims + "\"/>\n" + indent +
+           "  <Geometry GeometryType=\"" + (three ? "VXVYVZ" : "VXVY") + "\">\n" + items + indent +
+           "  </Geometry>\n" + indent + "</Grid>\n";
+  }
+
   // The sidecar is built from what the file holds (not from what this writer wrote), so it also covers
   // snapshots of an earlier run continued with append().
   std::string build_xdmf() {
@@ -445,33 +522,41 @@ struct H5Writer::State {
       max_n = std::max(max_n, grid.n);
       grids.push_back(std::move(grid));
     }
-    Handle xdmf = exists(file.get(), "/xdmf", partial)
-                      ? own(H5Gopen2(file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('/xdmf')")
-                      : create_group(file.get(), "/xdmf", partial);
+    Handle xdmf = xdmf_group();
     const hsize_t ids_size = max_n > 0 ? write_xdmf_ids(xdmf.get(), max_n) : 0;
 
     // Relative reference by the final name, so the pair of files can be moved together.
     const std::string h5 = fs::path(path).filename().string() + ":";
+    // ParaView's default reader shows one top-level grid only: with a background grid, each time step is a
+    // spatial collection of the particles and the grid.
+    const std::string mesh = background_grid_xml(xdmf.get(), h5, "        ");
     std::ostringstream x;
     x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
-      << "    <Grid Name=\"particles\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
+      << "    <Grid Name=\"run\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
     for (const auto& g : grids) {
       if (g.n == 0) {  // Xdmf3 (ParaView's reader) fails on empty grids, so an empty snapshot is only noted
         x << "      <!-- snapshot " << g.name << " at t = " << shortest(g.time) << " has no particles -->\n";
         continue;
       }
-      const std::string in = "          ";
-      x << "      <Grid Name=\"" << g.name << "\" GridType=\"Uniform\">\n"
-        << "        <Time Value=\"" << shortest(g.time) << "\"/>\n";
-      x << "        <Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << g.n << "\" NodesPerElement=\"1\">\n"
-        << data_item(h5 + "/xdmf/ids", g.n, ids_size, true, in) << "        </Topology>\n";
+      const std::string time = "<Time Value=\"" + shortest(g.time) + "\"/>\n";
+      std::string in = "        ";  // the particles' elements
+      if (mesh.empty()) {
+        x << "      <Grid Name=\"" << g.name << "\" GridType=\"Uniform\">\n        " << time;
+      } else {
+        x << "      <Grid Name=\"" << g.name << "\" GridType=\"Collection\" CollectionType=\"Spatial\">\n        "
+          << time << "        <Grid Name=\"particles\" GridType=\"Uniform\">\n";
+        in += "  ";
+      }
+      x << in << "<Topology TopologyType=\"Polyvertex\" NumberOfElements=\"" << g.n << "\" NodesPerElement=\"1\">\n"
+        << data_item(h5 + "/xdmf/ids", g.n, ids_size, true, in + "  ") << in << "</Topology>\n";
       Handle snapshot = own(H5Gopen2(snaps.get(), g.name.c_str(), H5P_DEFAULT), H5Gclose, partial, "H5Gopen2");
       const std::string combined_path = "/xdmf/" + g.name;
       Handle combined = exists(xdmf.get(), g.name, partial)
                             ? own(H5Gopen2(xdmf.get(), g.name.c_str(), H5P_DEFAULT), H5Gclose, partial, "H5Gopen2")
                             : create_group(xdmf.get(), g.name, partial);
       const ParaViewFields fields(snapshot.get(), combined.get(), g.columns, g.n, partial);
-      x << fields.xml(h5 + "/snapshots/" + g.name + "/", h5 + combined_path + "/");
+      x << fields.xml(h5 + "/snapshots/" + g.name + "/", h5 + combined_path + "/", in);
+      if (!mesh.empty()) x << "        </Grid>\n" << mesh;
       x << "      </Grid>\n";
     }
     x << "    </Grid>\n  </Domain>\n</Xdmf>\n";
@@ -499,9 +584,11 @@ H5Writer::H5Writer(std::string path, const std::string& scene_json, int dimensio
   Handle fapl = file_access(s.partial);
   s.file = own(H5Fcreate(s.partial.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, fapl.get()), H5Fclose, s.partial,
                "H5Fcreate (the run file for '" + s.path + "')");
-  write_strings(s.file.get(), "scene", {scene_json}, true, s.partial);
-  write_int(s.file.get(), "dimension", dimension, s.partial);
-  create_group(s.file.get(), "/snapshots", s.partial);
+  s.guard([&] {
+    write_strings(s.file.get(), "scene", {scene_json}, true, s.partial);
+    write_int(s.file.get(), "dimension", dimension, s.partial);
+    create_group(s.file.get(), "/snapshots", s.partial);
+  });
 }
 
 H5Writer H5Writer::append(std::string path) {
@@ -510,19 +597,32 @@ H5Writer H5Writer::append(std::string path) {
   s->path = std::move(path);
   s->partial = s->path + ".partial";
   std::error_code ec;
-  if (fs::exists(s->path, ec)) {
-    // Work on a copy: the complete file stays in place until close() replaces it.
-    fs::copy_file(s->path, s->partial, fs::copy_options::overwrite_existing, ec);
-    if (ec) throw OutputError("cannot copy '" + s->path + "' to '" + s->partial + "': " + ec.message());
-  } else if (!fs::exists(s->partial, ec)) {
-    throw OutputError("cannot continue '" + s->path + "': neither it nor its .partial file exists");
+  if (!fs::exists(s->path, ec) && fs::exists(s->partial, ec)) {
+    // a killed run: its .partial file (valid up to its last checkpoint) becomes the file kept if this run fails
+    fs::rename(s->partial, s->path, ec);
+    if (ec) throw OutputError("cannot rename '" + s->partial + "' to '" + s->path + "': " + ec.message());
   }
+  if (!fs::exists(s->path, ec))
+    throw OutputError("cannot continue '" + s->path + "': neither it nor its .partial file exists");
+  // Work on a copy: the complete file stays in place until close() replaces it.
+  fs::copy_file(s->path, s->partial, fs::copy_options::overwrite_existing, ec);
+  if (ec) {
+    const std::string why = ec.message();
+    fs::remove(s->partial, ec);
+    throw OutputError("cannot copy '" + s->path + "' to '" + s->partial + "': " + why + "; '" + s->path +
+                      "' is kept as it was");
+  }
+  s->continued = true;
   Handle fapl = file_access(s->partial);
   s->file = own(H5Fopen(s->partial.c_str(), H5F_ACC_RDWR, fapl.get()), H5Fclose, s->partial, "H5Fopen (append)");
-  s->dimension = static_cast<int>(read_number(s->file.get(), "dimension", s->partial));
-  if (exists(s->file.get(), "/metrics", s->partial)) s->open_metrics();
-  if (!exists(s->file.get(), "/snapshots", s->partial)) create_group(s->file.get(), "/snapshots", s->partial);
-  remove_link(s->file.get(), kCheckpointTmp, s->partial);  // left over if the earlier run died mid-checkpoint
+  State& state = *s;
+  state.guard([&] {
+    state.dimension = static_cast<int>(read_number(state.file.get(), "dimension", state.partial));
+    if (exists(state.file.get(), "/metrics", state.partial)) state.open_metrics();
+    if (!exists(state.file.get(), "/snapshots", state.partial))
+      create_group(state.file.get(), "/snapshots", state.partial);
+    remove_link(state.file.get(), kCheckpointTmp, state.partial);  // left over if the earlier run died mid-checkpoint
+  });
   return H5Writer(std::move(s));
 }
 
@@ -552,19 +652,21 @@ void H5Writer::set_metric_names(std::vector<std::string> names) {
     throw OutputError("'" + s.path + "': set_metric_names: the metrics table already has other columns");
   }
   if (names.empty()) throw OutputError("'" + s.path + "': set_metric_names: no column names");
-  const hsize_t ncols = names.size();
-  s.chunk_rows = std::max<hsize_t>(1, kMetricsChunkValues / ncols);
-  const hsize_t dims[2] = {0, ncols}, maxdims[2] = {H5S_UNLIMITED, ncols}, chunk[2] = {s.chunk_rows, ncols};
-  Handle space = own(H5Screate_simple(2, dims, maxdims), H5Sclose, s.partial, "H5Screate_simple");
-  Handle dcpl = own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, s.partial, "H5Pcreate");
-  check(H5Pset_chunk(dcpl.get(), 2, chunk), s.partial, "H5Pset_chunk");
-  check(H5Pset_deflate(dcpl.get(), 1), s.partial, "H5Pset_deflate");  // a part-filled chunk then costs little
-  s.metrics = own(H5Dcreate2(s.file.get(), "/metrics", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(),
-                             H5P_DEFAULT),
-                  H5Dclose, s.partial, "H5Dcreate2('/metrics')");
-  write_strings(s.metrics.get(), "columns", names, false, s.partial);
-  s.metric_names = std::move(names);
-  s.rows_in_file = 0;
+  s.guard([&] {
+    const hsize_t ncols = names.size();
+    s.chunk_rows = std::max<hsize_t>(1, kMetricsChunkValues / ncols);
+    const hsize_t dims[2] = {0, ncols}, maxdims[2] = {H5S_UNLIMITED, ncols}, chunk[2] = {s.chunk_rows, ncols};
+    Handle space = own(H5Screate_simple(2, dims, maxdims), H5Sclose, s.partial, "H5Screate_simple");
+    Handle dcpl = own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, s.partial, "H5Pcreate");
+    check(H5Pset_chunk(dcpl.get(), 2, chunk), s.partial, "H5Pset_chunk");
+    check(H5Pset_deflate(dcpl.get(), 1), s.partial, "H5Pset_deflate");  // a part-filled chunk then costs little
+    s.metrics = own(H5Dcreate2(s.file.get(), "/metrics", H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(),
+                               H5P_DEFAULT),
+                    H5Dclose, s.partial, "H5Dcreate2('/metrics')");
+    write_strings(s.metrics.get(), "columns", names, false, s.partial);
+    s.metric_names = std::move(names);
+    s.rows_in_file = 0;
+  });
 }
 
 void H5Writer::add_metrics(std::span<const double> row) {
@@ -574,7 +676,7 @@ void H5Writer::add_metrics(std::span<const double> row) {
     throw OutputError("'" + s.path + "': add_metrics: row has " + std::to_string(row.size()) +
                       " values, the table has " + std::to_string(s.metric_names.size()) + " columns");
   s.pending.insert(s.pending.end(), row.begin(), row.end());
-  if (s.pending.size() / s.metric_names.size() >= s.chunk_rows) s.flush_metrics();
+  if (s.pending.size() / s.metric_names.size() >= s.chunk_rows) s.guard([&] { s.flush_metrics(); });
 }
 
 void H5Writer::write_snapshot(long step, double time, std::span<const ColumnView> columns) {
@@ -586,12 +688,30 @@ void H5Writer::write_snapshot(long step, double time, std::span<const ColumnView
       throw OutputError("'" + s.path + "': write_snapshot: column '" + c.name + "' has " +
                         std::to_string(c.values.size()) + " values, '" + columns.front().name + "' has " +
                         std::to_string(columns.front().values.size()));
-  const std::string name = "/snapshots/" + snapshot_name(step);
-  remove_link(s.file.get(), name, s.partial);  // the same step again (e.g. after resume) replaces it
-  Handle g = create_group(s.file.get(), name, s.partial);
-  write_int(g.get(), "step", step, s.partial);
-  write_double(g.get(), "time", time, s.partial);
-  for (const auto& c : columns) write_column(g.get(), c, s.partial);
+  s.guard([&] {
+    const std::string name = "/snapshots/" + snapshot_name(step);
+    remove_link(s.file.get(), name, s.partial);  // the same step again (e.g. after resume) replaces it
+    Handle g = create_group(s.file.get(), name, s.partial);
+    write_int(g.get(), "step", step, s.partial);
+    write_double(g.get(), "time", time, s.partial);
+    for (const auto& c : columns) write_column(g.get(), c, s.partial);
+  });
+}
+
+void H5Writer::set_grid(std::span<const std::vector<double>> nodes) {
+  State& s = live("set_grid");
+  if (nodes.size() != static_cast<std::size_t>(s.dimension))
+    throw OutputError("'" + s.path + "': set_grid: " + std::to_string(nodes.size()) + " axes for a " +
+                      std::to_string(s.dimension) + "D run");
+  for (const auto& axis : nodes)
+    if (axis.empty()) throw OutputError("'" + s.path + "': set_grid: an axis without nodes");
+  s.guard([&] {
+    Handle xdmf = s.xdmf_group();
+    remove_link(xdmf.get(), "grid", s.partial);  // a continued run sets it again
+    Handle g = create_group(xdmf.get(), "grid", s.partial);
+    for (std::size_t d = 0; d < nodes.size(); ++d)
+      write_column(g.get(), {axis_name(static_cast<int>(d)), nodes[d]}, s.partial);
+  });
 }
 
 void H5Writer::write_checkpoint(long step, double time, std::span<const ColumnView> columns,
@@ -603,62 +723,69 @@ void H5Writer::write_checkpoint(long step, double time, std::span<const ColumnVi
     if (name.empty() || !seen.insert(name).second)
       throw OutputError("'" + s.path + "': write_checkpoint: scalar name '" + name +
                         "' is empty, reserved or repeated");
-  s.flush_metrics();  // the metrics belong to the state being saved
-  // Build the new checkpoint beside the old one and swap it in by links, so the old one is never half-replaced.
-  remove_link(s.file.get(), kCheckpointTmp, s.partial);
-  {
-    Handle g = create_group(s.file.get(), kCheckpointTmp, s.partial);
-    write_int(g.get(), "step", step, s.partial);
-    write_double(g.get(), "time", time, s.partial);
-    for (const auto& [name, value] : scalars) write_double(g.get(), name, value, s.partial);
-    for (const auto& c : columns) write_column(g.get(), c, s.partial);
-  }
-  remove_link(s.file.get(), "/checkpoint", s.partial);
-  check(H5Lmove(s.file.get(), kCheckpointTmp, s.file.get(), "/checkpoint", H5P_DEFAULT, H5P_DEFAULT), s.partial,
-        "H5Lmove('/checkpoint')");
-  check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+  s.guard([&] {
+    s.flush_metrics();  // the metrics belong to the state being saved
+    // Build the new checkpoint beside the old one and swap it in by links, so the old one is never half-replaced.
+    remove_link(s.file.get(), kCheckpointTmp, s.partial);
+    {
+      Handle g = create_group(s.file.get(), kCheckpointTmp, s.partial);
+      write_int(g.get(), "step", step, s.partial);
+      write_double(g.get(), "time", time, s.partial);
+      for (const auto& [name, value] : scalars) write_double(g.get(), name, value, s.partial);
+      for (const auto& c : columns) write_column(g.get(), c, s.partial);
+    }
+    remove_link(s.file.get(), "/checkpoint", s.partial);
+    check(H5Lmove(s.file.get(), kCheckpointTmp, s.file.get(), "/checkpoint", H5P_DEFAULT, H5P_DEFAULT), s.partial,
+          "H5Lmove('/checkpoint')");
+    check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+  });
 }
 
 void H5Writer::set_attribute(const std::string& name, const std::string& value) {
   State& s = live("set_attribute");
-  write_strings(s.file.get(), name, {value}, true, s.partial);
+  s.guard([&] { write_strings(s.file.get(), name, {value}, true, s.partial); });
 }
 
 void H5Writer::discard_after(long step, double time) {
   State& s = live("discard_after");
-  s.flush_metrics();
-  Handle snaps = own(H5Gopen2(s.file.get(), "/snapshots", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/snapshots')");
-  // the snapshots after `step`, and their ParaView datasets (/xdmf/<step>, ParaViewFields)
-  auto drop_after = [&](hid_t group) {
-    for (const auto& name : link_names(group, s.partial)) {
-      long long n = -1;
-      const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), n);
-      if (ec == std::errc() && end == name.data() + name.size() && n > step)
-        check(H5Ldelete(group, name.c_str(), H5P_DEFAULT), s.partial, "H5Ldelete('" + name + "')");
+  s.guard([&] {
+    s.flush_metrics();
+    Handle snaps =
+        own(H5Gopen2(s.file.get(), "/snapshots", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/snapshots')");
+    // the snapshots after `step`, and their ParaView datasets (/xdmf/<step>, ParaViewFields)
+    auto drop_after = [&](hid_t group) {
+      for (const auto& name : link_names(group, s.partial)) {
+        long long n = -1;
+        const auto [end, ec] = std::from_chars(name.data(), name.data() + name.size(), n);
+        if (ec == std::errc() && end == name.data() + name.size() && n > step)
+          check(H5Ldelete(group, name.c_str(), H5P_DEFAULT), s.partial, "H5Ldelete('" + name + "')");
+      }
+    };
+    drop_after(snaps.get());
+    if (exists(s.file.get(), "/xdmf", s.partial)) {
+      Handle xdmf = own(H5Gopen2(s.file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/xdmf')");
+      drop_after(xdmf.get());
     }
-  };
-  drop_after(snaps.get());
-  if (exists(s.file.get(), "/xdmf", s.partial)) {
-    Handle xdmf = own(H5Gopen2(s.file.get(), "/xdmf", H5P_DEFAULT), H5Gclose, s.partial, "H5Gopen2('/xdmf')");
-    drop_after(xdmf.get());
-  }
-  const auto t = std::find(s.metric_names.begin(), s.metric_names.end(), "t");
-  if (!s.metrics.valid() || t == s.metric_names.end()) return;
-  const std::size_t ncols = s.metric_names.size(), col = static_cast<std::size_t>(t - s.metric_names.begin());
-  const auto values = read_all(s.metrics.get(), s.partial, "/metrics");
-  hsize_t keep = 0;
-  while (keep < s.rows_in_file && !(values[keep * ncols + col] > time)) ++keep;
-  if (keep < s.rows_in_file) {
-    const hsize_t dims[2] = {keep, ncols};
-    check(H5Dset_extent(s.metrics.get(), dims), s.partial, "H5Dset_extent('/metrics')");
-    s.rows_in_file = keep;
-  }
+    const auto t = std::find(s.metric_names.begin(), s.metric_names.end(), "t");
+    if (!s.metrics.valid() || t == s.metric_names.end()) return;
+    const std::size_t ncols = s.metric_names.size(), col = static_cast<std::size_t>(t - s.metric_names.begin());
+    const auto values = read_all(s.metrics.get(), s.partial, "/metrics");
+    hsize_t keep = 0;
+    while (keep < s.rows_in_file && !(values[keep * ncols + col] > time)) ++keep;
+    if (keep < s.rows_in_file) {
+      const hsize_t dims[2] = {keep, ncols};
+      check(H5Dset_extent(s.metrics.get(), dims), s.partial, "H5Dset_extent('/metrics')");
+      s.rows_in_file = keep;
+    }
+  });
 }
 
 void H5Writer::flush() {
   State& s = live("flush");
-  s.flush_metrics();
-  check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+  s.guard([&] {
+    s.flush_metrics();
+    check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+  });
 }
 
 void H5Writer::close() {
@@ -666,10 +793,15 @@ void H5Writer::close() {
   quiet();
   State& s = *s_;
   s.closed = true;  // whatever happens below, do not try again from the destructor
-  s.flush_metrics();
-  const std::string xdmf = s.build_xdmf();
-  s.metrics.reset();
-  check(H5Fclose(s.file.release()), s.partial, "H5Fclose");  // its result matters: this is the final flush
+  std::string xdmf;
+  s.guard([&] {
+    s.flush_metrics();
+    xdmf = s.build_xdmf();
+    s.metrics.reset();
+    // flushed while the file is still open, so that a failure here finds it open (State::guard)
+    check(H5Fflush(s.file.get(), H5F_SCOPE_GLOBAL), s.partial, "H5Fflush");
+    s.file.close(s.partial);  // its result matters: this is the final flush
+  });
   std::error_code ec;
   fs::rename(s.partial, s.path, ec);
   if (ec) throw OutputError("cannot rename '" + s.partial + "' to '" + s.path + "': " + ec.message());
@@ -682,6 +814,8 @@ const std::string& H5Writer::path() const {
 }
 
 // ---- free functions -------------------------------------------------------------------------------------------
+
+void skip_hdf5_exit_handler() { H5dont_atexit(); }
 
 std::string xdmf_path(const std::string& h5_path) {
   const std::string ext = ".h5";

@@ -7,7 +7,9 @@
 //   /metrics           float64 (rows, ncols), extendible; attribute "columns" = the column names
 //   /snapshots/NNNNNN  one group per snapshot (zero-padded step); attributes step, time; one float64 column each
 //   /checkpoint        the latest restartable state; attributes step, time and named scalars; one column each
-//   /xdmf/ids, zeros   helper data for the sidecar only (vertex connectivity, and the missing y of 1D runs)
+//   /xdmf              data for the sidecar only: ids (vertex connectivity), <step>/{geometry, velocity,
+//                      displacement, stress, F} (the columns combined for ParaView) and grid/x0, x1 (, x2): the
+//                      node coordinates of the background grid (set_grid)
 //
 // Crash safety comes from the name, not from HDF5: the file is written as `<path>.partial` and renamed to
 // `<path>` only when it is complete, so `<path>` is never a half-written file. The HDF5 C API stays out of this
@@ -41,7 +43,8 @@ class H5Writer {
   /// Creates `<path>.partial` (truncating a leftover one) with the root attributes "scene" and "dimension".
   H5Writer(std::string path, const std::string& scene_json, int dimension);
   /// Continues an existing run file (resume): copies `<path>` to `<path>.partial` and opens that for writing, so
-  /// `<path>` stays intact until close(). If only `<path>.partial` exists (a killed run), continues that one.
+  /// `<path>` stays intact until close(). If only `<path>.partial` exists (a killed run), it is renamed to `<path>`
+  /// first and continued the same way, so it is kept if the continued run fails.
   static H5Writer append(std::string path);
 
   H5Writer(H5Writer&&) noexcept;
@@ -49,6 +52,8 @@ class H5Writer {
   H5Writer(const H5Writer&) = delete;
   H5Writer& operator=(const H5Writer&) = delete;
   /// If close() was not called: flush + close + rename anyway (a failed run keeps its data); never throws.
+  /// A write that failed (OutputError from any method that writes, e.g. on a full disk) has already closed the
+  /// writer and removed `<path>.partial`: its message names the file and says what was lost.
   ~H5Writer();
 
   /// Column names of the metrics table, e.g. {"t","mass","momentum_x",...}; call once before add_metrics.
@@ -61,6 +66,10 @@ class H5Writer {
   /// time and one chunked, shuffled, deflated float64 dataset per column. All columns have the particle count.
   /// Columns x0, x1 (, x2) are the positions the XDMF sidecar uses as geometry; the others become XDMF attributes.
   void write_snapshot(long step, double time, std::span<const ColumnView> columns);
+  /// Node coordinates of the background grid, one vector per axis (as many axes as the run's dimension), written
+  /// to /xdmf/grid; the sidecar then shows the grid beside the particles in every time step. Replaces an earlier
+  /// grid (a continued run sets it again).
+  void set_grid(std::span<const std::vector<double>> nodes);
   /// Writes/overwrites group /checkpoint with attributes step, time, the given columns (any lengths) and the named
   /// scalar attributes; then flushes the file (H5Fflush) so the .partial file is valid after each call.
   void write_checkpoint(long step, double time, std::span<const ColumnView> columns,
@@ -84,6 +93,11 @@ class H5Writer {
   void finish_quietly() noexcept;
   std::unique_ptr<State> s_;
 };
+
+/// For a program's main(), before anything touches HDF5: no HDF5 clean-up at exit. After a write failed on a full
+/// disk HDF5 may hold a file it could not close, and its exit handler crashes on it (SIGSEGV); the run file is
+/// removed by then (H5Writer), so there is nothing left for that handler to flush.
+void skip_hdf5_exit_handler();
 
 /// The XDMF sidecar of a run file: `<path minus .h5>.xdmf` (or `<path>.xdmf` if it does not end in .h5).
 std::string xdmf_path(const std::string& h5_path);

@@ -685,6 +685,14 @@ Scene parse_scene(const json& j) {
   return s;
 }
 
+// Deeper JSON than any scene needs (the deepest key, bodies.N.box.N.N, is 5 levels) is refused while parsing:
+// printing or copying a value is recursive, and 1e5 nested arrays overflow the stack.
+constexpr int kMaxDepth = 32;
+
+[[noreturn]] void too_deep(const std::string& where) {
+  throw SceneError(one_line(where + ": nested deeper than " + std::to_string(kMaxDepth) + " levels"));
+}
+
 json read_json_text(const std::string& text, const std::string& origin) {
   // Duplicate keys are silently collapsed by JSON parsers; in a scene that hides a mistake, so they are errors.
   struct Frame {
@@ -703,6 +711,7 @@ json read_json_text(const std::string& text, const std::string& origin) {
     if (!stack.empty() && stack.back().array) ++stack.back().index;
   };
   const json::parser_callback_t track = [&](int, json::parse_event_t ev, json& parsed) {
+    if (stack.size() > kMaxDepth) too_deep("scene: " + origin + ": " + path());
     switch (ev) {
       case json::parse_event_t::object_start: stack.push_back({false, {}, {}, 0}); break;
       case json::parse_event_t::array_start: stack.push_back({true, {}, {}, 0}); break;
@@ -736,23 +745,27 @@ json read_json_text(const std::string& text, const std::string& origin) {
       if (auto c = msg.find(": "); c != std::string::npos) msg.erase(0, c + 2);
     throw SceneError(one_line("scene: " + origin + ":" + std::to_string(line) + ":" + std::to_string(column) + ": " + msg));
   } catch (const json::exception& e) {
-    // e.g. a number too large for a double (1e400); no position is reported for these
+    // e.g. a number too large for a double (1e400): no position is reported, but the key being read is known
     std::string msg = e.what();
     if (auto c = msg.find("] "); !msg.empty() && msg[0] == '[' && c != std::string::npos) msg.erase(0, c + 2);
-    throw SceneError(one_line("scene: " + origin + ": " + msg));
+    const std::string key = path();
+    throw SceneError(one_line("scene: " + origin + ": " + (key.empty() ? "" : key + ": ") + msg +
+                              " (expected a finite number)"));
   }
 }
 
-Scene load_scene_file(const std::string& path) {
+json read_json_file(const std::string& path) {
   std::error_code ec;
-  if (std::filesystem::is_directory(path, ec)) throw SceneError("scene: cannot read " + path + ": is a directory");
+  if (std::filesystem::is_directory(path, ec)) throw SceneError(one_line("scene: cannot read " + path + ": is a directory"));
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(one_line("scene: cannot read " + path + ": " + std::strerror(errno)));
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw SceneError(one_line("scene: cannot read " + path + ": " + std::strerror(errno)));
-  return parse_scene(read_json_text(text.str(), path));
+  return read_json_text(text.str(), path);
 }
+
+Scene load_scene_file(const std::string& path) { return parse_scene(read_json_file(path)); }
 
 void apply_override(json& scene, const std::string& assignment) {
   const auto eq = assignment.find('=');
@@ -767,7 +780,18 @@ void apply_override(json& scene, const std::string& assignment) {
     start = dot + 1;
   }
   // A JSON value if it parses as one; otherwise the text itself, so that `algorithm.mapping=mls` works unquoted.
-  json value = json::parse(text, nullptr, false);
+  json value;
+  try {
+    value = json::parse(text, [&](int depth, json::parse_event_t, json&) {
+      if (depth > kMaxDepth) too_deep("--set " + key);
+      return true;
+    });
+  } catch (const json::parse_error&) {
+    value = json::value_t::discarded;
+  } catch (const json::out_of_range& e) {  // 1e400: a number, but not one a double holds
+    throw SceneError(one_line("--set " + key + " = " + text + ": expected a finite number (" +
+                              std::string(e.what()).substr(std::string(e.what()).find("] ") + 2) + ")"));
+  }
   if (value.is_discarded()) {
     value = text;
     try {  // a scene is JSON text: a value that is not valid UTF-8 could never be written back (found by fuzzing)

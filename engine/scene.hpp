@@ -138,7 +138,9 @@ struct Scene {
 Scene parse_scene(const nlohmann::json& j);
 /// Reads a file (a JSON syntax error gives line and column) and parses it.
 Scene load_scene_file(const std::string& path);
-/// Reads JSON text; `origin` names it in error messages.
+/// Reads a scene file as JSON (a directory or an unreadable file is a SceneError naming the path).
+nlohmann::json read_json_file(const std::string& path);
+/// Reads JSON text; `origin` names it in error messages. Nesting deeper than any scene needs is refused.
 nlohmann::json read_json_text(const std::string& text, const std::string& origin);
 /// Applies one `--set KEY=VALUE` override (dotted path, JSON value or bare string) to a raw scene.
 void apply_override(nlohmann::json& scene, const std::string& assignment);

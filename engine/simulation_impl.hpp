@@ -728,8 +728,8 @@ RunErrors Simulation<Dim>::errors() const {
         ns += ex.sigma[a * Dim + b] * ex.sigma[a * Dim + b];
       }
   }
-  const auto relative = [](double e, double ref) { return ref > 0 ? std::sqrt(e / ref) : std::nan(""); };
-  return {std::sqrt(eu / n), std::sqrt(ev / n), std::sqrt(es / n), relative(eu, nu), relative(es, ns)};
+  return {std::sqrt(eu / n), std::sqrt(ev / n), std::sqrt(es / n), std::sqrt(eu), std::sqrt(es), std::sqrt(nu),
+          std::sqrt(ns)};
 }
 
 template <int Dim>

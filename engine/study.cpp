@@ -616,10 +616,7 @@ int study_command(const StudyCommand& command) {
     if (command.scene_path.empty()) throw SceneError("mpm study: a scene file is required");
     if (command.vary.empty()) throw SceneError("mpm study: expected at least one --vary KEY=V1,V2,...");
     if (command.repeat < 1) throw SceneError("--repeat " + std::to_string(command.repeat) + ": expected at least 1");
-    std::ifstream in(command.scene_path);
-    if (!in) throw SceneError("scene: cannot read " + command.scene_path);
-    const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    json base = read_json_text(text, command.scene_path);
+    json base = read_json_file(command.scene_path);
     for (const auto& s : command.sets) apply_override(base, s);
     drop_output_file(base);
     std::vector<StudyAxis> axes;

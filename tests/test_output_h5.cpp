@@ -193,6 +193,51 @@ TEST_CASE("A 1D writer destroyed without close() still produces the final file",
   CHECK(x.find("<Attribute Name=\"velocity\" AttributeType=\"Vector\"") != std::string::npos);
 }
 
+TEST_CASE("The background grid is shown beside the particles in every time step", "[output]") {
+  TempDir tmp;
+  const std::string path = tmp.file("plate.h5");
+  const std::vector<double> x0{0.2, 0.7}, x1{0.1, 0.9}, axis0{0, 0.5, 1}, axis1{0, 1};
+  {
+    H5Writer w(path, kScene, 2);
+    const std::vector<std::vector<double>> wrong{axis0};
+    CHECK_THROWS_AS(w.set_grid(wrong), OutputError);  // one axis for a 2D run
+    const std::vector<std::vector<double>> grid{axis0, axis1};
+    w.set_grid(grid);
+    const std::vector<ColumnView> cols{{"x0", x0}, {"x1", x1}};
+    w.write_snapshot(0, 0.0, cols);
+    w.write_snapshot(5, 0.5, cols);
+    w.write_snapshot(9, 0.9, cols);
+    w.discard_after(5, 0.5);  // drops snapshot 9, keeps the grid
+  }
+  CHECK(same_bits(mpm::read_dataset(path, "/xdmf/grid/x0"), axis0));
+  CHECK(same_bits(mpm::read_dataset(path, "/xdmf/grid/x1"), axis1));
+  const std::string x = slurp(tmp.file("plate.xdmf"));
+  CHECK(count(x, "<Time Value=") == 2);
+  CHECK(count(x, "CollectionType=\"Spatial\"") == 2);
+  CHECK(count(x, "<Grid Name=\"particles\" GridType=\"Uniform\">") == 2);
+  CHECK(count(x, "<Grid Name=\"grid\" GridType=\"Uniform\">") == 2);
+  // VXVY lists x first; the mesh's Dimensions list the slowest axis (y) first
+  CHECK(x.find("<Topology TopologyType=\"2DRectMesh\" Dimensions=\"2 3\"/>") != std::string::npos);
+  CHECK(x.find("<Geometry GeometryType=\"VXVY\">") != std::string::npos);
+  CHECK(x.find(">plate.h5:/xdmf/grid/x1<") != std::string::npos);
+}
+
+TEST_CASE("A 1D background grid is a row of nodes at y = 0", "[output]") {
+  TempDir tmp;
+  const std::string path = tmp.file("bar.h5");
+  const std::vector<double> x0{0.25, 0.75}, axis0{0, 0.5, 1};
+  {
+    H5Writer w(path, R"({"dimension": 1})", 1);
+    const std::vector<std::vector<double>> grid{axis0};
+    w.set_grid(grid);
+    const std::vector<ColumnView> cols{{"x0", x0}};
+    w.write_snapshot(0, 0.0, cols);
+  }
+  const std::string x = slurp(tmp.file("bar.xdmf"));
+  CHECK(x.find("<Topology TopologyType=\"2DRectMesh\" Dimensions=\"1 3\"/>") != std::string::npos);
+  CHECK(x.find("<DataItem Dimensions=\"1\" Format=\"XML\">0</DataItem>") != std::string::npos);
+}
+
 TEST_CASE("append() continues a run after its checkpoint", "[output]") {
   TempDir tmp;
   const std::string path = tmp.file("resume.h5");

@@ -1,7 +1,9 @@
 // The `mpm` command line (DESIGN.md, "Command line" contract): run, validate.
 #include <unistd.h>
 
+#include <cerrno>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -10,6 +12,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "engine/output_h5.hpp"
 #include "engine/run.hpp"
 #include "engine/scene.hpp"
 #include "engine/study.hpp"
@@ -18,21 +21,23 @@ namespace {
 
 /// Loads the scene file and applies the --set overrides in order.
 mpm::Scene load_with_overrides(const std::string& path, const std::vector<std::string>& sets) {
-  std::ifstream in(path);
-  if (!in) throw mpm::SceneError("scene: cannot read " + path);
-  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  nlohmann::json j = mpm::read_json_text(text, path);
+  nlohmann::json j = mpm::read_json_file(path);
   for (const auto& s : sets) mpm::apply_override(j, s);
   return mpm::parse_scene(j);
 }
 
-/// A path we can create: its directory exists and is writable.
+/// A file we can create, checked before the run (as output.file is) so that a long run does not fail at its end:
+/// not a directory, and its directory exists and is writable.
 void require_writable(const std::string& path, const std::string& option) {
   if (path.empty()) return;
+  std::error_code ec;
+  if (std::filesystem::is_directory(path, ec))
+    throw mpm::SceneError(option + " = " + path + ": expected a file name, not a directory");
   std::filesystem::path dir = std::filesystem::path(path).parent_path();
   if (dir.empty()) dir = ".";
-  if (access(dir.c_str(), W_OK) != 0)
-    throw mpm::SceneError(option + " = " + path + ": expected a file in an existing, writable directory");
+  if (access(dir.c_str(), W_OK | X_OK) != 0)
+    throw mpm::SceneError(option + " = " + path + ": expected a file in an existing, writable directory: " +
+                          dir.string() + ": " + std::strerror(errno));
 }
 
 void write_json_atomically(const std::string& path, const nlohmann::json& j) {
@@ -63,6 +68,7 @@ void print_report(const nlohmann::json& s) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  mpm::skip_hdf5_exit_handler();
   CLI::App app{"mpm: B-spline material point method with conservative least-squares reconstruction"};
   app.require_subcommand(1);
 
@@ -116,12 +122,12 @@ int main(int argc, char** argv) {
       return mpm::exit_invalid;
     }
     require_writable(summary, "--summary");
+    require_writable(out, "--out");
     mpm::RunResult r;
     if (!resume.empty()) {
       r = mpm::resume_run(resume, {threads, "", quiet});
     } else {
       const mpm::Scene scene = load_with_overrides(scene_path, sets);
-      require_writable(out, "--out");
       r = mpm::run_scene(scene, {threads, out, quiet});
     }
     if (r.status == mpm::exit_invalid) {

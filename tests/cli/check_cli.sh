@@ -66,5 +66,33 @@ expect 3 "CFL violated at step .* by a factor .*wave speed c = " -- "$mpm" run c
 expect 3 "energy balance violated at step .*external work.*last good state" -- "$mpm" run \
   "$scenes/stability/block-impact.json" --set algorithm.mapping=tls --set algorithm.update=musl --quiet
 [ -f escape.h5 ] && pass=$((pass+1)) || { echo "FAIL: no output after an unstable run"; fail=$((fail+1)); }
+# faults that end cleanly with exit 2 naming what is wrong, before any run
+deep=$(printf '%*s' 100000 '' | tr ' ' '[')
+printf '%s' "$deep" > deep.json
+expect 2 "deep.json: .*nested deeper than" -- "$mpm" run deep.json --quiet
+expect 2 "^--set material.E: nested deeper than" -- "$mpm" validate "$scenes/plate.json" --set "material.E=$deep"
+sed 's/"E": 1.0e7/"E": 1e400/' "$scenes/plate.json" > huge.json
+expect 2 "huge.json: material.E: .*1e400" -- "$mpm" validate huge.json
+expect 2 "^--set material.E = 1e400: expected a finite number" -- "$mpm" validate "$scenes/plate.json" --set material.E=1e400
+mkdir adir
+expect 2 "cannot read adir: is a directory" -- "$mpm" run adir --quiet
+expect 2 "cannot read adir: is a directory" -- "$mpm" validate adir
+expect 2 "^--out = adir: expected a file name, not a directory" -- "$mpm" run "$scenes/plate.json" --out adir --quiet
+expect 2 "^--summary = adir: expected a file name, not a directory" -- "$mpm" run "$scenes/plate.json" --summary adir
+expect 2 "^--summary = nodir/s.json: expected a file in an existing, writable directory" -- \
+  "$mpm" run "$scenes/plate.json" --summary nodir/s.json
+# a write that fails (here a file size limit, as a full disk; SIGXFSZ ignored so that write() reports EFBIG): exit 1
+# naming the file and what was lost, no crash, no .partial file left; a resumed run keeps the file it continued
+limited() { local blocks=$1; shift; bash -c 'trap "" XFSZ; ulimit -f "$0"; exec "$@"' "$blocks" "$@"; }
+expect 1 "full.h5.partial.*failed.*nothing was saved \('full.h5' was not written\)" -- limited 150 \
+  "$mpm" run "$scenes/plate.json" --set grid.cells=[8,8] --set output.every=1 --out full.h5 --quiet
+[ ! -e full.h5 ] && [ ! -e full.h5.partial ] && [ ! -e full.xdmf ] && pass=$((pass+1)) ||
+  { echo "FAIL: files left after a failed write: $(ls full*)"; fail=$((fail+1)); }
+"$mpm" run "$scenes/plate.json" --set grid.cells=[8,8] --set output.checkpoint_every=100 --out kept.h5 --quiet >/dev/null
+cp kept.h5 kept.orig
+expect 1 "kept.h5.partial.*failed.*'kept.h5' is kept as it was" -- limited $(( $(stat -c %s kept.h5) / 1024 + 4 )) \
+  "$mpm" run --resume kept.h5 --quiet
+cmp -s kept.h5 kept.orig && [ ! -e kept.h5.partial ] && pass=$((pass+1)) ||
+  { echo "FAIL: the resumed file was not kept"; fail=$((fail+1)); }
 echo "cli: $pass passed, $fail failed"
 [ "$fail" -eq 0 ]

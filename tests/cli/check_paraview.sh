@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # ParaView's default XDMF reader opens the run files of a 2D run (with checkpoints in the file) and a 1D run, and
-# finds the particles, vectors and tensors (check_paraview.py). Usage: check_paraview.sh MPM SCENES_DIR
+# finds the particles, vectors and tensors, and the background grid (check_paraview.py).
+# Usage: check_paraview.sh MPM SCENES_DIR
 set -euo pipefail
 mpm=$1 scenes=$2
 here=$(cd "$(dirname "$0")" && pwd)
@@ -11,5 +12,8 @@ cd "$work"
   --out "$work/plate.h5" --summary plate.json --quiet
 "$mpm" run "$scenes/bar.json" --set output.every=5 --out "$work/bar.h5" --summary bar.json --quiet
 particles() { /usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["particles"])' "$1"; }
-xvfb-run -a pvpython "$here/check_paraview.py" "$work/plate.xdmf" "$(particles plate.json)"
-xvfb-run -a pvpython "$here/check_paraview.py" "$work/bar.xdmf" "$(particles bar.json)"
+# grid nodes: 9 × 9 for the 8 × 8 plate, cells + 1 for the bar
+bar_nodes=$(/usr/bin/python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["grid"]["cells"][0] + 1)' \
+  "$scenes/bar.json")
+xvfb-run -a pvpython "$here/check_paraview.py" "$work/plate.xdmf" "$(particles plate.json)" 81
+xvfb-run -a pvpython "$here/check_paraview.py" "$work/bar.xdmf" "$(particles bar.json)" "$bar_nodes"
