@@ -244,171 +244,211 @@ StartPoint read_checkpoint(const std::string& file) {
 /// Opens the run file once the scene is known to be runnable (so an invalid scene writes nothing).
 using OpenOutput = std::function<std::optional<H5Writer>()>;
 
+/// One run, phase by phase: set up (the simulation, the run file, the guards; or the state to resume), step to
+/// the end (guards, metrics, snapshots, checkpoints, signals), recover the last good state when the run became
+/// unstable, and summarise.
 template <int Dim>
-RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, const OpenOutput& open_output,
-                  const std::optional<StartPoint>& start) {
-  RunResult result;
-  Simulation<Dim> sim(scene);  // SceneError escapes: status 2
-  std::optional<H5Writer> out = open_output();
-
-  std::vector<std::string> metric_names{"step", "t", "kinetic_energy", "strain_energy", "total_energy",
-                                        "mass_rel_max", "momentum_rel_max"};
-  if (sim.has_exact())
-    for (const char* e : {"displacement_rms", "velocity_rms", "stress_rms"}) metric_names.push_back(e);
-  if (out) {
-    out->set_metric_names(metric_names);
-    std::vector<std::vector<double>> nodes(Dim);  // the knots of the uniform grid on [0, length], for the sidecar
-    for (int d = 0; d < Dim; ++d)
-      for (int i = 0; i <= scene.grid.cells[d]; ++i)
-        nodes[d].push_back(scene.grid.length[d] * i / scene.grid.cells[d]);
-    out->set_grid(nodes);
+class Run {
+ public:
+  Run(const Scene& scene, const RunOptions& options, int threads, const OpenOutput& open_output,
+      const std::optional<StartPoint>& start)
+      : scene_(scene), threads_(threads), sim_(scene),  // SceneError escapes: status 2
+        out_(open_output()), balance_(scene.time.energy_tolerance, sim_.energy().total(), sim_.external_power(),
+                                      sim_.time()),
+        progress_(!options.quiet) {
+    if (out_) describe_output();
+    if (start) {
+      sim_.load_state(start->state);
+      balance_ = EnergyBalance(scene.time.energy_tolerance, start->balance);
+      drift_max_ = start->drift_max;
+      exact_scale_ = start->exact_scale;
+      if (out_) out_->discard_after(sim_.steps_done(), sim_.time());
+    }
+    energy0_ = balance_.state().energy0;
+    total_ = sim_.steps_total();
+    metrics_every_ = std::max(1L, total_ / 200);
+    guard_every_ = guard_interval(total_);
+    snapshot_every_ = scene.output.every > 0 ? scene.output.every : total_;
+    if (!start) {
+      record_metrics(sim_.energy());
+      snapshot();
+    }
+    last_balanced_ = sim_.steps_done();
+    backup_.save(sim_);
   }
 
-  const double tolerance = scene.time.energy_tolerance;
-  EnergyBalance balance(tolerance, sim.energy().total(), sim.external_power(), sim.time());
-  double drift_max = 0.0;
-  ExactScale exact_scale;
-  if (start) {
-    sim.load_state(start->state);
-    balance = EnergyBalance(tolerance, start->balance);
-    drift_max = start->drift_max;
-    exact_scale = start->exact_scale;
-    if (out) out->discard_after(sim.steps_done(), sim.time());
-  }
-  const double energy0 = balance.state().energy0;
-  const long total = sim.steps_total();
-  const long metrics_every = std::max(1L, total / 200);
-  const long guard_every = guard_interval(total);
-  const long snapshot_every = scene.output.every > 0 ? scene.output.every : total;
-  const long checkpoint_every = scene.output.checkpoint_every;
-  const bool check_cfl = scene.time.cfl.has_value();
-
-  auto record_metrics = [&](const Energy& e) {
-    if (energy0 > 0) drift_max = std::max(drift_max, std::abs(e.total() - energy0) / energy0);
-    const std::optional<RunErrors> err = sim.has_exact() ? std::optional(sim.errors()) : std::nullopt;
-    if (err) exact_scale.sample(*err);
-    if (!out) return;
-    std::vector<double> row{static_cast<double>(sim.steps_done()), sim.time(), e.kinetic, e.strain, e.total(),
-                            sim.conservation().mass_rel_max, sim.conservation().momentum_rel_max};
-    if (err) row.insert(row.end(), {err->displacement_rms, err->velocity_rms, err->stress_rms});
-    out->add_metrics(row);
-  };
-  auto snapshot = [&] {
-    if (out) out->write_snapshot(sim.steps_done(), sim.time(), columns_of(sim.particles()));
-  };
-
-  if (!start) {
-    record_metrics(sim.energy());
-    snapshot();
-  }
-  long last_balanced = sim.steps_done();  // the last step whose energy balance was checked and held
-  bool energy_failed = false;
-  StateBackup backup;
-  backup.save(sim);
-  Progress progress(!options.quiet);
-  StopOnSignals signals;
-  double stepping_s = 0.0;
-  long steps_timed = 0;
-  bool checkpoint_due = false;
-  try {
-    while (!sim.finished()) {
-      if (sim.steps_done() % backup_every == 0) backup.save(sim);
+  /// Steps to the end, or to a signal (then a checkpoint is written); throws UnstableRun.
+  void step_to_end() {
+    bool checkpoint_due = false;
+    while (!sim_.finished()) {
+      if (sim_.steps_done() % backup_every == 0) backup_.save(sim_);
       const auto t0 = Clock::now();
-      sim.step();
-      stepping_s += seconds_since(t0);
-      ++steps_timed;
-      const long s = sim.steps_done();
-      if (check_cfl) mpm::check_cfl(sim);
-      const bool guard_now = s % guard_every == 0 || sim.finished();
-      const bool metrics_now = s % metrics_every == 0 || sim.finished();
-      if (guard_now || metrics_now) {
-        const Energy e = sim.energy();
-        if (guard_now) {
-          if (auto why = balance.sample(s, sim.time(), e.total(), sim.external_power())) {
-            energy_failed = true;
-            throw UnstableRun(*why);
-          }
-          last_balanced = s;
-        }
-        if (metrics_now) record_metrics(e);
-      }
-      if (s % snapshot_every == 0 || sim.finished()) snapshot();
+      sim_.step();
+      stepping_s_ += seconds_since(t0);
+      ++steps_timed_;
+      const long s = sim_.steps_done();
+      if (scene_.time.cfl) check_cfl(sim_);
+      check_and_record(s);
+      if (s % snapshot_every_ == 0 || sim_.finished()) snapshot();
       // checkpoints (periodic, or on a signal) wait for the next step that bins the particles afresh, at most
       // reorder-period − 1 steps: a run resumed from any other step would bin them differently and end up
       // different in the last bits (Simulation::next_step_bins)
-      checkpoint_due = checkpoint_due || (out && checkpoint_every > 0 && s % checkpoint_every == 0);
-      if (checkpoint_due && sim.next_step_bins() && !sim.finished()) {
-        write_checkpoint(*out, sim, balance, drift_max, exact_scale);
+      checkpoint_due = checkpoint_due || (out_ && scene_.output.checkpoint_every > 0 && s % scene_.output.checkpoint_every == 0);
+      if (checkpoint_due && sim_.next_step_bins() && !sim_.finished()) {
+        write_checkpoint(*out_, sim_, balance_, drift_max_, exact_scale_);
         checkpoint_due = false;
       }
-      progress.update(s, total, sim.time());
-      if (const int sig = stop_signal.load(); sig != 0 && !sim.finished() && sim.next_step_bins()) {
-        result.status = exit_failure;
-        result.message = "stopped by signal " + std::to_string(sig) + " at step " + std::to_string(s);
-        if (out) {
-          write_checkpoint(*out, sim, balance, drift_max, exact_scale);
-          result.message += "; checkpoint written to " + out->path() + " (continue with: mpm run --resume " +
-                            out->path() + ")";
-        }
-        break;
+      progress_.update(s, total_, sim_.time());
+      if (const int sig = stop_signal.load(); sig != 0 && !sim_.finished() && sim_.next_step_bins()) {
+        stop_by_signal(sig);
+        return;
       }
     }
-  } catch (const UnstableRun& e) {
-    result.status = exit_unstable;
-    result.message = e.what();
-    // replay from the last backup up to the last good step: the run is deterministic, so this is the last good
-    // state exactly; it is saved as a snapshot (and checkpoint) beside the earlier ones. A step that threw is not
-    // counted, so the last good state is the one before it; when the energy balance failed, it is the last sample
-    // that held (backups fall on samples, so it is never before the backup).
-    const long last_good = energy_failed ? std::max(last_balanced, backup.step()) : sim.steps_done();
-    sim.load_state(backup.load());
-    while (sim.steps_done() < last_good) sim.step();
-    snapshot();
-    if (out) {
-      write_checkpoint(*out, sim, balance, drift_max, exact_scale);
-      out->set_attribute("status", "unstable: " + result.message);
-    }
-    result.message += "; last good state (step " + std::to_string(sim.steps_done()) + ") saved";
   }
 
-  auto& j = result.summary;
-  j["status"] = result.status == exit_ok ? "ok" : result.status == exit_unstable ? "unstable" : "interrupted";
-  if (!result.message.empty()) j["reason"] = result.message;
-  j["steps"] = sim.steps_done();
-  j["t"] = sim.time();
-  j["dt"] = sim.dt();
-  j["particles"] = sim.particles().size();
-  j["threads"] = threads;
-  j["wall_s"] = stepping_s;
-  j["particle_steps_per_s"] =
-      stepping_s > 0 ? static_cast<double>(sim.particles().size()) * steps_timed / stepping_s : 0.0;
-  if (sim.has_exact() && result.status == exit_ok) {
-    const RunErrors err = sim.errors();
-    j["errors"] = {{"displacement_rms", err.displacement_rms},
-                   {"velocity_rms", err.velocity_rms},
-                   {"stress_rms", err.stress_rms},
-                   {"displacement_rel_l2", ExactScale::relative(err.displacement_l2, exact_scale.displacement)},
-                   {"stress_rel_l2", ExactScale::relative(err.stress_l2, exact_scale.stress)}};
+  /// Replays from the last backup up to the last good step: the run is deterministic, so this is the last good
+  /// state exactly; it is saved as a snapshot (and checkpoint) beside the earlier ones. A step that threw is not
+  /// counted, so the last good state is the one before it; when the energy balance failed, it is the last sample
+  /// that held (backups fall on samples, so it is never before the backup).
+  void recover_last_good_state(const UnstableRun& e) {
+    result_.status = exit_unstable;
+    result_.message = e.what();
+    const long last_good = energy_failed_ ? std::max(last_balanced_, backup_.step()) : sim_.steps_done();
+    sim_.load_state(backup_.load());
+    while (sim_.steps_done() < last_good) sim_.step();
+    snapshot();
+    if (out_) {
+      write_checkpoint(*out_, sim_, balance_, drift_max_, exact_scale_);
+      out_->set_attribute("status", "unstable: " + result_.message);
+    }
+    result_.message += "; last good state (step " + std::to_string(sim_.steps_done()) + ") saved";
   }
-  j["conservation"] = {{"mass_rel_max", sim.conservation().mass_rel_max},
-                       {"momentum_rel_max", sim.conservation().momentum_rel_max}};
-  const EnergyBalance::State& eb = balance.state();
-  j["energy"] = {{"initial", energy0},          {"drift_rel_max", drift_max},     {"external_work", eb.work},
-                 {"balance_gain_max", eb.excess_max}, {"balance_loss_max", -eb.excess_min}, {"tolerance", tolerance}};
-  const FallbackCounts fb = sim.fallbacks();
-  j["fallbacks"] = {{"neighbour", fb.neighbour}, {"degree", fb.degree}, {"constant", fb.constant}, {"empty", fb.empty}};
-  j["pipeline"] = sim.pipeline();
-  j["columns"] = sim.particles().column_names();
-  j["bytes_per_particle"] = sim.particles().bytes_per_particle();
-  const double rss = peak_resident_bytes();
-  j["peak_rss_bytes"] = rss;
-  j["peak_rss_bytes_per_particle"] = rss / static_cast<double>(sim.particles().size());
-  if (out) {
-    out->set_attribute("summary", j.dump());
-    out->close();
-    j["output"] = out->path();
+
+  /// The summary (README: --summary), also stored in the run file, which is closed.
+  RunResult finish() {
+    auto& j = result_.summary;
+    j["status"] = result_.status == exit_ok ? "ok" : result_.status == exit_unstable ? "unstable" : "interrupted";
+    if (!result_.message.empty()) j["reason"] = result_.message;
+    j["steps"] = sim_.steps_done();
+    j["t"] = sim_.time();
+    j["dt"] = sim_.dt();
+    j["particles"] = sim_.particles().size();
+    j["threads"] = threads_;
+    j["wall_s"] = stepping_s_;
+    j["particle_steps_per_s"] =
+        stepping_s_ > 0 ? static_cast<double>(sim_.particles().size()) * steps_timed_ / stepping_s_ : 0.0;
+    if (sim_.has_exact() && result_.status == exit_ok) {
+      const RunErrors err = sim_.errors();
+      j["errors"] = {{"displacement_rms", err.displacement_rms},
+                     {"velocity_rms", err.velocity_rms},
+                     {"stress_rms", err.stress_rms},
+                     {"displacement_rel_l2", ExactScale::relative(err.displacement_l2, exact_scale_.displacement)},
+                     {"stress_rel_l2", ExactScale::relative(err.stress_l2, exact_scale_.stress)}};
+    }
+    j["conservation"] = {{"mass_rel_max", sim_.conservation().mass_rel_max},
+                         {"momentum_rel_max", sim_.conservation().momentum_rel_max}};
+    const EnergyBalance::State& eb = balance_.state();
+    j["energy"] = {{"initial", energy0_},           {"drift_rel_max", drift_max_},
+                   {"external_work", eb.work},      {"balance_gain_max", eb.excess_max},
+                   {"balance_loss_max", -eb.excess_min}, {"tolerance", scene_.time.energy_tolerance}};
+    const FallbackCounts fb = sim_.fallbacks();
+    j["fallbacks"] = {{"neighbour", fb.neighbour}, {"degree", fb.degree}, {"constant", fb.constant}, {"empty", fb.empty}};
+    j["pipeline"] = sim_.pipeline();
+    j["columns"] = sim_.particles().column_names();
+    j["bytes_per_particle"] = sim_.particles().bytes_per_particle();
+    const double rss = peak_resident_bytes();
+    j["peak_rss_bytes"] = rss;
+    j["peak_rss_bytes_per_particle"] = rss / static_cast<double>(sim_.particles().size());
+    if (out_) {
+      out_->set_attribute("summary", j.dump());
+      out_->close();
+      j["output"] = out_->path();
+    }
+    return result_;
   }
-  return result;
+
+ private:
+  /// The metrics' columns and the grid (the knots of the uniform grid on [0, length], for the sidecar).
+  void describe_output() {
+    std::vector<std::string> names{"step", "t", "kinetic_energy", "strain_energy", "total_energy",
+                                   "mass_rel_max", "momentum_rel_max"};
+    if (sim_.has_exact())
+      for (const char* e : {"displacement_rms", "velocity_rms", "stress_rms"}) names.push_back(e);
+    out_->set_metric_names(names);
+    std::vector<std::vector<double>> nodes(Dim);
+    for (int d = 0; d < Dim; ++d)
+      for (int i = 0; i <= scene_.grid.cells[d]; ++i) nodes[d].push_back(scene_.grid.length[d] * i / scene_.grid.cells[d]);
+    out_->set_grid(nodes);
+  }
+
+  /// The energy guard and the metrics, each at its own interval (and at the end).
+  void check_and_record(long s) {
+    const bool guard_now = s % guard_every_ == 0 || sim_.finished();
+    const bool metrics_now = s % metrics_every_ == 0 || sim_.finished();
+    if (!guard_now && !metrics_now) return;
+    const Energy e = sim_.energy();
+    if (guard_now) {
+      if (auto why = balance_.sample(s, sim_.time(), e.total(), sim_.external_power())) {
+        energy_failed_ = true;
+        throw UnstableRun(*why);
+      }
+      last_balanced_ = s;
+    }
+    if (metrics_now) record_metrics(e);
+  }
+
+  void record_metrics(const Energy& e) {
+    if (energy0_ > 0) drift_max_ = std::max(drift_max_, std::abs(e.total() - energy0_) / energy0_);
+    const std::optional<RunErrors> err = sim_.has_exact() ? std::optional(sim_.errors()) : std::nullopt;
+    if (err) exact_scale_.sample(*err);
+    if (!out_) return;
+    std::vector<double> row{static_cast<double>(sim_.steps_done()), sim_.time(), e.kinetic, e.strain, e.total(),
+                            sim_.conservation().mass_rel_max, sim_.conservation().momentum_rel_max};
+    if (err) row.insert(row.end(), {err->displacement_rms, err->velocity_rms, err->stress_rms});
+    out_->add_metrics(row);
+  }
+
+  void snapshot() {
+    if (out_) out_->write_snapshot(sim_.steps_done(), sim_.time(), columns_of(sim_.particles()));
+  }
+
+  void stop_by_signal(int sig) {
+    result_.status = exit_failure;
+    result_.message = "stopped by signal " + std::to_string(sig) + " at step " + std::to_string(sim_.steps_done());
+    if (!out_) return;
+    write_checkpoint(*out_, sim_, balance_, drift_max_, exact_scale_);
+    result_.message += "; checkpoint written to " + out_->path() + " (continue with: mpm run --resume " +
+                       out_->path() + ")";
+  }
+
+  const Scene& scene_;
+  const int threads_;
+  RunResult result_;
+  Simulation<Dim> sim_;
+  std::optional<H5Writer> out_;
+  EnergyBalance balance_;
+  double drift_max_ = 0.0, energy0_ = 0.0;
+  ExactScale exact_scale_;
+  long total_ = 0, metrics_every_ = 1, guard_every_ = 1, snapshot_every_ = 1;
+  long last_balanced_ = 0;  ///< the last step whose energy balance was checked and held
+  bool energy_failed_ = false;
+  StateBackup backup_;
+  Progress progress_;
+  StopOnSignals signals_;
+  double stepping_s_ = 0.0;
+  long steps_timed_ = 0;
+};
+
+template <int Dim>
+RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, const OpenOutput& open_output,
+                  const std::optional<StartPoint>& start) {
+  Run<Dim> run(scene, options, threads, open_output, start);
+  try {
+    run.step_to_end();
+  } catch (const UnstableRun& e) {
+    run.recover_last_good_state(e);
+  }
+  return run.finish();
 }
 
 RunResult invalid(const std::string& message) {
