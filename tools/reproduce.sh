@@ -77,7 +77,15 @@ study column-ddmpm-tls tools/scenes/column-compaction.json --repeat 3 --set grid
 # thesis §4.6.2: bar with a traction at its free end (neo-Hookean as in the thesis, and linear elastic)
 study bar-traction tools/scenes/bar-traction.json --vary 'grid.cells=[20],[40],[80],[160]' \
   --vary material.model=neo-hookean,linear-elastic --vary algorithm.mapping=direct,cubic-spline,tls
-# thesis §4.6.2, Fig 4.9: the unified approach on the same bar (the material domain carries the basis)
+# thesis §4.6.2, Fig 4.9: convergence of every chapter-4 method with 12 particles per cell to T = 0.1 s, USL
+TRACTION_49="--set particles.per_cell=[12] --set time.end=0.1 --vary grid.cells=[20],[40],[80],[160]"
+study traction-4-9 tools/scenes/bar-traction.json --set algorithm.update=usl $TRACTION_49 \
+  --vary grid.basis=linear,maxent,bspline2
+study traction-4-9-otm tools/scenes/bar-traction.json --set algorithm.mass=consistent --set grid.basis=linear \
+  --vary algorithm.update=otm $TRACTION_49 --vary grid.basis=linear,maxent
+study traction-4-9-unified tools/scenes/bar-traction.json --set algorithm.mass=consistent \
+  --vary algorithm.update=unified $TRACTION_49
+# thesis §4.6.2: the unified approach on the bar of section 5 (the material domain carries the basis)
 study bar-traction-unified tools/scenes/bar-traction.json --set algorithm.mass=consistent --vary algorithm.update=unified \
   --vary 'grid.cells=[20],[40],[80],[160]' --vary material.model=neo-hookean,linear-elastic
 
