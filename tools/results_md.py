@@ -514,7 +514,12 @@ B = 0.005 m, E = 10 MPa, ν = 0.3, ρ = 1000 kg/m³, 32×32 cells, 4×4 particle
 (tools/scenes/plate-unified.json), USL as in the thesis; OTM and the unified approach with the consistent mass. The
 thesis plots σ11 along x2⁰ ≈ 0.07 m: P1 gives a piecewise-constant profile, MPM-P1's far from the exact one, maxent
 (d_max = 3 for MPM, 2 for OTM) much closer, BSMPM and the unified approach closest. Here d_max = 2 for both (the
-engine's max-ent reaches at most 2 cells), and the stress RMS over all particles stands for the profile:
+engine's max-ent reaches at most 2 cells). The profile along the particle row nearest X2 = 0.07 m
+(`tools/plot_profiles.py`): MPM-P1 and OTM-P1 in steps of a cell, MPM-P1 with grid-crossing outliers, the others on
+the exact curve — as in the thesis. The stress RMS over all particles:
+
+![Fig 4.10]({rel}/profiles_4_6_3.png)
+
 
 {convergence_table(by_method(plate_463), 1.0)}
 
