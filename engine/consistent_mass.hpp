@@ -32,14 +32,22 @@ class ConsistentMassSolver {
       for (auto* a : {&r_[d], &z_[d], &p_[d], &Ap_[d]}) a->assign(dofs, 0.0);
   }
 
-  /// x = M⁻¹ rhs on the DOFs where free(d, i), 0 elsewhere; M from `carriers` binned by `bins`, `lumped` its row
-  /// sums. Returns the CG iterations.
-  template <class B, class Free>
-  int solve(const B& basis, MassCarriers<Dim> carriers, const CellBins<Dim>& bins, int stride1,
-            const std::vector<double>& lumped, const Free& free, std::array<std::vector<double>, Dim>& x,
-            const std::array<std::vector<double>, Dim>& rhs) {
+  /// M from `carriers` binned by `bins`, for the solves that follow (the carriers do not move within a step).
+  template <class B>
+  void assemble(const B& basis, MassCarriers<Dim> carriers, const CellBins<Dim>& bins, int stride1) {
     constexpr int S = B::width;
-    assemble<S>(basis, carriers, bins, stride1);
+    band_.assign(static_cast<std::size_t>(dofs_) * mass_band<Dim, S>, 0.0);
+    const unsigned* order = bins.order().data();
+    bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
+      assemble_consistent_mass<Dim, S>(basis, carriers, stride1, band_.data(), order, b, e);
+    });
+  }
+
+  /// x = M⁻¹ rhs on the DOFs where free(d, i), 0 elsewhere, with the M last assembled for stencils of width S;
+  /// `lumped` its row sums. Returns the CG iterations.
+  template <int S, class Free>
+  int solve(int stride1, const std::vector<double>& lumped, const Free& free, std::array<std::vector<double>, Dim>& x,
+            const std::array<std::vector<double>, Dim>& rhs) {
     const double* m = lumped.data();
     // start from the lumped solution, masked
     for_each_dof([&](int d, std::size_t i) { x[d][i] = free(d, i) ? rhs[d][i] / m[i] : 0.0; });
@@ -94,15 +102,6 @@ class ConsistentMassSolver {
       for (std::size_t i = b; i < e; ++i) p[i] = free(d, i) ? z[i] + beta * p[i] : 0.0;
     });
     return rz_new;
-  }
-
-  template <int S, class B>
-  void assemble(const B& basis, MassCarriers<Dim> carriers, const CellBins<Dim>& bins, int stride1) {
-    band_.assign(static_cast<std::size_t>(dofs_) * mass_band<Dim, S>, 0.0);
-    const unsigned* order = bins.order().data();
-    bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
-      assemble_consistent_mass<Dim, S>(basis, carriers, stride1, band_.data(), order, b, e);
-    });
   }
 
   /// y = M x, all components, a row per DOF. Rows whose band lies inside [0, dofs) skip the bounds test.

@@ -618,12 +618,18 @@ class Simulation<Dim>::Step {
   bool free_dof(int d, std::size_t i) const { return sim_.grid_.m[i] > sim_.empty_mass_ && !sim_.grid_.fixed[d][i]; }
 
   /// x = M⁻¹ rhs with the consistent mass; its carriers are the particles, or the Gauss points (thesis eq. 3.9).
+  /// M is assembled at the step's first solve: the carriers stay where they are until the step's last gather, so
+  /// a second solve (USL's a and v, USF's v and a) reuses it.
   void solve_consistent(std::array<std::vector<double>, Dim>& x, const std::array<std::vector<double>, Dim>& rhs) {
-    const MassCarriers<Dim> carriers = sim_.gauss_ ? MassCarriers<Dim>(sim_.gauss_->view())
-                                       : pv_.carriers(basis_moves_with_body(sim_.scene_.algorithm.update));
-    const CellBins<Dim>& bins = sim_.gauss_ ? sim_.gauss_->bins() : sim_.bins_;
-    sim_.cg_iterations_ += sim_.mass_solver_->solve(basis_, carriers, bins, sim_.grid_.stride1, sim_.grid_.m,
-                                                    [&](int d, std::size_t i) { return free_dof(d, i); }, x, rhs);
+    if (!mass_assembled_) {
+      const MassCarriers<Dim> carriers = sim_.gauss_ ? MassCarriers<Dim>(sim_.gauss_->view())
+                                         : pv_.carriers(basis_moves_with_body(sim_.scene_.algorithm.update));
+      const CellBins<Dim>& bins = sim_.gauss_ ? sim_.gauss_->bins() : sim_.bins_;
+      sim_.mass_solver_->assemble(basis_, carriers, bins, sim_.grid_.stride1);
+      mass_assembled_ = true;
+    }
+    sim_.cg_iterations_ += sim_.mass_solver_->template solve<S>(
+        sim_.grid_.stride1, sim_.grid_.m, [&](int d, std::size_t i) { return free_dof(d, i); }, x, rhs);
   }
 
   /// out = in / m on the free DOFs (the lumped mass), 0 elsewhere.
@@ -683,6 +689,7 @@ class Simulation<Dim>::Step {
   const GridView<Dim> gv_;
   const std::size_t np_;
   ParticleGuard guard_;
+  bool mass_assembled_ = false;  ///< the consistent mass of this step's carriers is in the solver (solve_consistent)
 };
 
 template <int Dim>

@@ -173,14 +173,15 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
     double mb[Dim] = {};         // m_p b_p
     if constexpr (Fields.force) {
       const double V = det(p, ip) * p.V0[ip];  // eq. 2.42
-      for (int a = 0; a < Dim; ++a)
-        for (int b = 0; b < Dim; ++b) Vsig[a][b] = V * p.s[sym_index<Dim>(a, b)][ip];
-      if constexpr (Fields.reference && Dim == 2) {  // V F⁻¹ σ = V0 adj(F) σ; in 1D V/F = V0
+      if constexpr (Fields.reference && Dim == 2) {  // V F⁻¹ σ = V0 adj(F) σ
         const double adj[2][2] = {{p.F[3][ip], -p.F[1][ip]}, {-p.F[2][ip], p.F[0][ip]}};
         for (int a = 0; a < 2; ++a)
           for (int b = 0; b < 2; ++b) Vsig[a][b] = p.V0[ip] * (adj[a][0] * p.s[sym_index<2>(0, b)][ip] + adj[a][1] * p.s[sym_index<2>(1, b)][ip]);
-      } else if constexpr (Fields.reference) {
+      } else if constexpr (Fields.reference) {  // V / F = V0
         Vsig[0][0] = p.V0[ip] * p.s[0][ip];
+      } else {
+        for (int a = 0; a < Dim; ++a)
+          for (int b = 0; b < Dim; ++b) Vsig[a][b] = V * p.s[sym_index<Dim>(a, b)][ip];
       }
       if constexpr (Body::active) {
         const auto b = body.template at<Dim>(ip);

@@ -500,7 +500,7 @@ kernels/stencil.hpp), which brought MPM-maxent from 5.2× to 2.6× BSMPM's time 
     {otm_bar_cmd}
 
 OTM and the unified approach cost what their consistent mass costs, two CG solves per step: BSMPM-USL with the
-lumped mass, with the consistent mass and the unified approach take 0.012, 0.056 and 0.052 s for the 100 steps on
+lumped mass, with the consistent mass and the unified approach take 0.012, 0.046 and 0.043 s for the 100 steps on
 511 cells (1 thread, medians of 3: `mpm run tools/scenes/bar-otm.json --set grid.cells=[511] --set
 algorithm.update=usl|unified --set algorithm.mass=lumped|consistent --threads 1`). Carrying the basis adds nothing.
 
