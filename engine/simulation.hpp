@@ -18,6 +18,7 @@
 #include "engine/consistent_mass.hpp"
 #include "engine/gauss_points.hpp"
 #include "engine/material.hpp"
+#include "engine/particle_measures.hpp"
 #include "engine/particle_store.hpp"
 #include "engine/problem.hpp"
 #include "engine/scene.hpp"
@@ -27,66 +28,6 @@
 #include "kernels/transfer.hpp"
 
 namespace mpm {
-
-/// The run became unstable: the message names the step, particle, position and quantity.
-struct UnstableRun : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-/// Maximum relative differences between particle and grid totals after any P2G so far.
-struct Conservation {
-  double mass_rel_max = 0.0;
-  double momentum_rel_max = 0.0;
-};
-
-/// RMS errors over particles against the exact solution (paper eq. 43), and the parts of the relative L2 errors of
-/// thesis Figs 5.12–5.14: the error norm sqrt(Σ_p |f_p − f(X_p)|²) and the exact field's norm sqrt(Σ_p |f(X_p)|²).
-/// The run divides the first by the largest second one so far (run.cpp): the exact field of a vibration passes
-/// through zero, and an error relative to that instant's norm is then meaningless.
-struct RunErrors {
-  double displacement_rms = 0.0, velocity_rms = 0.0, stress_rms = 0.0;
-  double displacement_l2 = 0.0, stress_l2 = 0.0;
-  double displacement_exact_l2 = 0.0, stress_exact_l2 = 0.0;
-};
-
-struct Energy {
-  double kinetic = 0.0, strain = 0.0;
-  double total() const { return kinetic + strain; }
-};
-
-/// The explicit stability limit of a state, dt_crit = κ h_min / max_p (c(J_p) + |v_p|), and the particle that sets
-/// it. One definition for the step chosen from `time.cfl`, the start-up check of `time.dt` and the per-step check.
-/// κ = 1 with a lumped mass for the accelerations; less with the consistent mass (consistent_mass_step_factor).
-struct CriticalStep {
-  double dt = 0.0;          ///< s
-  double kappa = 1.0;       ///< the mass matrix's factor κ
-  double h = 0.0;           ///< smallest cell size, m
-  std::size_t particle = 0;
-  double wave_speed = 0.0;  ///< tangent P-wave speed c(J) at that particle, m/s
-  double speed = 0.0;       ///< |v| of that particle, m/s
-  double J = 1.0;
-};
-
-/// The consistent mass shortens the explicit step: on a uniform grid the highest frequency of M⁻¹K (Fourier
-/// symbols of the 1D mass and stiffness stencils, maximised over the wave number) is ω_max h/c = 2√3 for P1, √10
-/// for quadratic and 3.144 for cubic B-splines, against 2 for the lumped P1 mass that h/c stands for; a tensor
-/// product adds the axes' ω². So κ = 2 / (ω_max h/c) / √dim. DDMPM has P1's mass matrix and smoother gradients,
-/// max-ent has not been derived: both take P1's κ, the smallest. Measured on the plate of stability/plate.json
-/// (2D): the unified approach runs at cfl 0.46 and stops at 0.5 (κ = 0.447), OTM-P1 runs at 0.40 and stops at
-/// 0.44 (κ = 0.408).
-inline double consistent_mass_step_factor(Basis basis, int dim) {
-  const double omega_h_over_c = basis == Basis::bspline2 ? std::sqrt(10.0) : basis == Basis::bspline3 ? 3.1436 : 2.0 * std::sqrt(3.0);
-  return 2.0 / omega_h_over_c / std::sqrt(static_cast<double>(dim));
-}
-
-/// How a critical step was computed, for messages.
-inline std::string critical_step_formula(const CriticalStep& c) {
-  if (c.kappa == 1.0) return "h/(c + |v|)";
-  std::ostringstream f;
-  f.precision(3);
-  f << c.kappa << " h/(c + |v|) (consistent mass)";
-  return f.str();
-}
 
 /// Every basis the engine can run, resolved once per step.
 template <int Dim>
@@ -109,19 +50,10 @@ struct GridState {
   GridView<Dim> view();
 };
 
-/// Everything that determines the rest of a run: particle columns (in storage order), clock and the running
-/// conservation maxima. Restoring it and stepping on gives bitwise the same result as never having stopped.
-struct SimulationState {
-  long step = 0;
-  double time = 0.0;
-  Conservation conservation;
-  std::vector<std::string> names;
-  std::vector<std::vector<double>> columns;
-};
-
 template <int Dim>
 class Simulation {
  public:
+  static constexpr int dim = Dim;
   /// Builds the particles and grid of a validated scene. Throws SceneError for a scene it cannot run.
   explicit Simulation(const Scene& scene);
   ~Simulation();

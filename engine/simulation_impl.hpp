@@ -78,24 +78,6 @@ CellLayout cell_layout(const ParticleSpec& spec, int dim, std::mt19937_64* rng) 
 }
 
 template <int Dim>
-FieldSet needed_fields(const Problem<Dim>& problem, Update update) {
-  FieldSet f;
-  f.add(Field::position).add(Field::velocity).add(Field::deformation).add(Field::stress);
-  f.add(Field::mass).add(Field::volume0);
-  if (problem.has_exact() || problem.body_force_needs_reference() || basis_moves_with_body(update))
-    f.add(Field::reference);
-  return f;
-}
-
-/// Particles of every body, generated per cell of the grid: positions, reference volume, mass, velocity.
-template <int Dim>
-struct Seeds {
-  std::vector<std::array<double, Dim>> x;
-  std::vector<double> V0, m;
-  std::vector<std::array<double, Dim>> v;
-};
-
-template <int Dim>
 Seeds<Dim> seed_particles(const Scene& scene, const Problem<Dim>& problem) {
   Seeds<Dim> s;
   std::mt19937_64 rng(scene.particles.seed);
@@ -213,13 +195,6 @@ GridState<Dim> make_grid(const Scene& scene) {
   return grid;
 }
 
-template <int Dim>
-long count_steps(const Scene& scene, double dt) {
-  const double n = scene.time.end / dt;
-  const long rounded = std::lround(n);
-  return std::abs(n - rounded) < 1e-9 * std::max(1.0, n) ? std::max(1L, rounded) : static_cast<long>(std::ceil(n));
-}
-
 }  // namespace
 
 template <int Dim>
@@ -282,50 +257,13 @@ Simulation<Dim>::Simulation(const Scene& scene)
       }()) {
   if (scene.dimension != Dim) throw std::logic_error("Simulation: scene dimension does not match");
 
-  const auto bodies = problem_->bodies();
-  for (std::size_t b = 0; b < bodies.size(); ++b) {
-    const MaterialSpec& m = bodies[b].material;
-    // one constitutive law per run (resolved once per step); bodies may differ in density only
-    if (m.model != scene.material.model || m.E != scene.material.E || m.nu != scene.material.nu)
-      throw SceneError("scene: bodies." + std::to_string(b) +
-                       ".material: expected the scene's model, E and nu (bodies may differ in density only)");
-  }
-
+  check_body_materials<Dim>(scene, problem_->bodies());
   const Seeds<Dim> seeds = seed_particles(scene, *problem_);
-  const std::size_t n = seeds.x.size();
-  if (n == 0) throw SceneError("scene: bodies: no particle falls inside any body");
-  store_ = ParticleStore<Dim>(n, needed_fields(*problem_, scene.algorithm.update));
-  auto pv = store_.view();
-  for (std::size_t p = 0; p < n; ++p) {
-    for (int d = 0; d < Dim; ++d) {
-      pv.x[d][p] = seeds.x[p][d];
-      pv.v[d][p] = seeds.v[p][d];
-      if (pv.X[d]) store_.column(Field::reference, d)[p] = seeds.x[p][d];
-    }
-    for (int a = 0; a < Dim; ++a) pv.F[a * Dim + a][p] = 1.0;
-    store_.column(Field::mass)[p] = seeds.m[p];
-    store_.column(Field::volume0)[p] = seeds.V0[p];
-  }
-  particle_mass_ = deterministic_sum(n, [&](std::size_t p) { return seeds.m[p]; });
+  store_ = store_from_seeds(seeds, needed_fields(*problem_, scene.algorithm.update));
+  particle_mass_ = deterministic_sum(seeds.m.size(), [&](std::size_t p) { return seeds.m[p]; });
 
-  // time step: given, or a fraction of the critical step of the initial state (the same definition the per-step
-  // check of time.cfl uses, so a run at cfl < 1 does not fail its first check by construction)
-  const CriticalStep critical = critical_step();
-  if (scene.time.cfl) {
-    dt_ = *scene.time.cfl * critical.dt;
-  } else {
-    dt_ = *scene.time.dt;
-    if (dt_ > critical.dt) {
-      std::ostringstream msg;
-      msg << "scene: time.dt = " << dt_ << ": expected at most the critical step " << critical_step_formula(critical)
-          << " = " << critical.dt
-          << " s of the initial state (cell size " << critical.h << " m; particle " << critical.particle
-          << ": wave speed " << critical.wave_speed << " m/s, |v| = " << critical.speed
-          << " m/s); use a smaller time.dt or time.cfl";
-      throw SceneError(msg.str());
-    }
-  }
-  steps_total_ = count_steps<Dim>(scene, dt_);
+  dt_ = time_step_for(scene, critical_step());
+  steps_total_ = count_steps(scene, dt_);
   empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
 
   grid_ = make_grid<Dim>(scene);
@@ -345,33 +283,12 @@ Simulation<Dim>::~Simulation() = default;
 
 template <int Dim>
 SimulationState Simulation<Dim>::save_state() const {
-  SimulationState st;
-  st.step = step_;
-  st.time = time_;
-  st.conservation = conservation_;
-  st.names = store_.column_names();
-  for (const auto& name : st.names) {
-    const auto c = store_.column(name);
-    st.columns.emplace_back(c.begin(), c.end());
-  }
-  return st;
+  return save_particle_state(store_, step_, time_, conservation_);
 }
 
 template <int Dim>
 void Simulation<Dim>::load_state(const SimulationState& st) {
-  // columns are matched by name (a file may list them in another order); all must be there, with every particle
-  const auto names = store_.column_names();
-  std::vector<std::size_t> source(names.size());
-  for (std::size_t k = 0; k < names.size(); ++k) {
-    const auto it = std::find(st.names.begin(), st.names.end(), names[k]);
-    if (it == st.names.end()) throw std::invalid_argument("state: column " + names[k] + " is missing");
-    source[k] = it - st.names.begin();
-    if (st.columns[source[k]].size() != store_.size())
-      throw std::invalid_argument("state: column " + names[k] + " has " + std::to_string(st.columns[source[k]].size()) +
-                                  " values, this scene has " + std::to_string(store_.size()) + " particles");
-  }
-  for (std::size_t k = 0; k < names.size(); ++k)
-    std::copy(st.columns[source[k]].begin(), st.columns[source[k]].end(), store_.column(names[k]).begin());
+  load_particle_columns(store_, st);
   step_ = st.step;
   time_ = st.time;
   conservation_ = st.conservation;
@@ -465,25 +382,12 @@ void Simulation<Dim>::check_momentum(const MomentumTotals<Dim>& particles) {
 
 template <int Dim>
 void Simulation<Dim>::raise_unstable(std::size_t p, const char* stage) const {
-  const auto& s = store_;
-  std::ostringstream msg;
-  msg.precision(6);
-  msg << "unstable at step " << step_ + 1 << " (t = " << time_ + dt_ << " s), " << stage << ": particle " << p
-      << " at x = (";
-  for (int d = 0; d < Dim; ++d) msg << (d ? ", " : "") << s.column(Field::position, d)[p];
-  double J = s.column(Field::deformation, 0)[p];
-  if constexpr (Dim == 2)
-    J = J * s.column(Field::deformation, 3)[p] - s.column(Field::deformation, 1)[p] * s.column(Field::deformation, 2)[p];
-  msg << "), J = " << J << ", v = (";
-  for (int d = 0; d < Dim; ++d) msg << (d ? ", " : "") << s.column(Field::velocity, d)[p];
-  msg << ")";
   bool outside = false;
   for (int d = 0; d < Dim; ++d) {
-    const double x = s.column(Field::position, d)[p];
+    const double x = store_.column(Field::position, d)[p];
     outside = outside || !(x >= 0.0 && x <= scene_.grid.length[d]);
   }
-  msg << (!std::isfinite(J) ? ": non-finite deformation" : !(J > 0) ? ": J <= 0" : outside ? ": left the grid" : ": non-finite value");
-  throw UnstableRun(msg.str());
+  raise_unstable_particle(store_, p, step_ + 1, time_ + dt_, stage, outside, "grid");
 }
 
 template <int Dim>
@@ -709,87 +613,21 @@ double Simulation<Dim>::step_with(const B& basis, const M& material, const F& bo
 
 template <int Dim>
 RunErrors Simulation<Dim>::errors() const {
-  const auto& s = store_;
-  const std::size_t n = s.size();
-  std::array<std::span<const double>, Dim> x, X, v;
-  for (int d = 0; d < Dim; ++d) {
-    x[d] = s.column(Field::position, d);
-    X[d] = s.column(Field::reference, d);
-    v[d] = s.column(Field::velocity, d);
-  }
-  std::array<std::span<const double>, sym_components<Dim>> sig;
-  for (int c = 0; c < sym_components<Dim>; ++c) sig[c] = s.column(Field::stress, c);
-  double eu = 0, ev = 0, es = 0, nu = 0, ns = 0;  // n*: Σ of the exact field squared
-  for (std::size_t p = 0; p < n; ++p) {
-    std::array<double, Dim> Xp;
-    for (int d = 0; d < Dim; ++d) Xp[d] = X[d][p];
-    const ExactState<Dim> ex = problem_->exact(Xp, time_);
-    for (int d = 0; d < Dim; ++d) {
-      eu += std::pow(x[d][p] - X[d][p] - ex.u[d], 2);
-      nu += ex.u[d] * ex.u[d];
-      ev += std::pow(v[d][p] - ex.v[d], 2);
-    }
-    for (int a = 0; a < Dim; ++a)
-      for (int b = 0; b < Dim; ++b) {
-        es += std::pow(sig[sym_index<Dim>(a, b)][p] - ex.sigma[a * Dim + b], 2);
-        ns += ex.sigma[a * Dim + b] * ex.sigma[a * Dim + b];
-      }
-  }
-  return {std::sqrt(eu / n), std::sqrt(ev / n), std::sqrt(es / n), std::sqrt(eu), std::sqrt(es), std::sqrt(nu),
-          std::sqrt(ns)};
+  return particle_errors(store_, *problem_, time_);
 }
 
 template <int Dim>
 CriticalStep Simulation<Dim>::critical_step() const {
-  const auto& s = store_;
-  const auto m = s.column(Field::mass);
-  const auto V0 = s.column(Field::volume0);
-  CriticalStep out;
-  out.h = 1e300;
-  for (int d = 0; d < Dim; ++d) out.h = std::min(out.h, scene_.grid.length[d] / scene_.grid.cells[d]);
-  // the fastest signal c(J) + |v| over particles; ties go to the lowest index, so the result (and the particle a
-  // message names) does not depend on the thread count
-  struct Fastest {
-    double signal = -1.0;
-    std::size_t p = 0;
-  };
-  const auto faster = [](const Fastest& a, const Fastest& b) {
-    return b.signal > a.signal || (b.signal == a.signal && b.p < a.p) ? b : a;
-  };
-  const auto signal_of = [&](const auto& mat, std::size_t p, double& c, double& v, double& J) {
-    double F[Dim * Dim], v2 = 0;
-    for (int k = 0; k < Dim * Dim; ++k) F[k] = s.column(Field::deformation, k)[p];
-    for (int d = 0; d < Dim; ++d) v2 += std::pow(s.column(Field::velocity, d)[p], 2);
-    J = Dim == 1 ? F[0] : F[0] * F[3] - F[1] * F[2];
-    c = mat.wave_speed(J, m[p] / V0[p]);
-    v = std::sqrt(v2);
-    return c + v;
-  };
-  std::visit(
-      [&](const auto& mat) {
-        const Fastest f = tbb::parallel_reduce(
-            tbb::blocked_range<std::size_t>(0, s.size(), 4096), Fastest{},
-            [&](const tbb::blocked_range<std::size_t>& r, Fastest acc) {
-              double c, v, J;
-              for (std::size_t p = r.begin(); p < r.end(); ++p) acc = faster(acc, {signal_of(mat, p, c, v, J), p});
-              return acc;
-            },
-            faster);
-        out.particle = f.p;
-        signal_of(mat, f.p, out.wave_speed, out.speed, out.J);
-      },
-      material_);
-  if (scene_.algorithm.mass == MassMatrix::consistent) out.kappa = consistent_mass_step_factor(scene_.grid.basis, Dim);
-  out.dt = out.kappa * out.h / (out.wave_speed + out.speed);
-  return out;
+  double h = 1e300;
+  for (int d = 0; d < Dim; ++d) h = std::min(h, scene_.grid.length[d] / scene_.grid.cells[d]);
+  const double kappa =
+      scene_.algorithm.mass == MassMatrix::consistent ? consistent_mass_step_factor(scene_.grid.basis, Dim) : 1.0;
+  return critical_step_of(store_, material_, h, kappa);
 }
 
 template <int Dim>
 std::array<const double*, Dim> Simulation<Dim>::reference_columns() const {
-  std::array<const double*, Dim> X{};
-  if (store_.has(Field::reference))
-    for (int d = 0; d < Dim; ++d) X[d] = store_.column(Field::reference, d).data();
-  return X;
+  return reference_columns_of(store_);
 }
 
 template <int Dim>
@@ -813,50 +651,12 @@ double Simulation<Dim>::external_power() const {
           },
           basis_);
   }
-  if (!problem_->has_body_force()) return loads_power;
-  const auto& s = store_;
-  const auto m = s.column(Field::mass);
-  return loads_power + std::visit(
-      [&](const auto& force) {
-        if constexpr (!std::decay_t<decltype(force)>::active) {
-          return 0.0;
-        } else {
-          return deterministic_sum(s.size(), [&](std::size_t p) {
-            const std::array<double, Dim> b = force.template at<Dim>(p);
-            double bv = 0.0;
-            for (int d = 0; d < Dim; ++d) bv += b[d] * s.column(Field::velocity, d)[p];
-            return m[p] * bv;
-          });
-        }
-      },
-      problem_->body_force(time_, reference_columns()));
+  return loads_power + body_force_power<Dim>(store_, *problem_, time_, reference_columns());
 }
 
 template <int Dim>
 Energy Simulation<Dim>::energy() const {
-  Energy e;
-  const auto& s = store_;
-  const auto m = s.column(Field::mass);
-  const auto V0 = s.column(Field::volume0);
-  std::array<std::span<const double>, Dim> v;
-  std::array<std::span<const double>, Dim * Dim> F_col;
-  for (int d = 0; d < Dim; ++d) v[d] = s.column(Field::velocity, d);
-  for (int c = 0; c < Dim * Dim; ++c) F_col[c] = s.column(Field::deformation, c);
-  e.kinetic = deterministic_sum(s.size(), [&](std::size_t p) {
-    double v2 = 0;
-    for (int d = 0; d < Dim; ++d) v2 += v[d][p] * v[d][p];
-    return 0.5 * m[p] * v2;
-  });
-  e.strain = std::visit(
-      [&](const auto& mat) {
-        return deterministic_sum(s.size(), [&](std::size_t p) {
-          double F[Dim * Dim];
-          for (int c = 0; c < Dim * Dim; ++c) F[c] = F_col[c][p];
-          return V0[p] * mat.template energy_density<Dim>(F);
-        });
-      },
-      material_);
-  return e;
+  return particle_energy(store_, material_);
 }
 
 }  // namespace mpm
