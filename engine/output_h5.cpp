@@ -137,9 +137,11 @@ std::vector<std::string> read_strings(hid_t obj, const std::string& name, const 
 
 // Columns compress well with shuffle + deflate(1) (exponent bytes are alike), at little CPU cost. A zero-size
 // dataset cannot be chunked (a chunk dimension must be >= 1 and <= a fixed size), so empty columns stay contiguous.
-// With `components` > 1 the dataset is (n, components), row-major: a vector or tensor per particle.
-void write_column(hid_t group, const ColumnView& c, const std::string& file, hsize_t components = 1) {
-  const hsize_t dims[2] = {c.values.size() / components, components}, n = dims[0];
+// `values` (n × components of `mem_type`) become a dataset of `file_type`; with `components` > 1 it is
+// (n, components), row-major: a vector or tensor per particle, a triangle's nodes.
+void write_array(hid_t group, const std::string& name, hid_t file_type, hid_t mem_type, const void* values,
+                 hsize_t n, hsize_t components, const std::string& file) {
+  const hsize_t dims[2] = {n, components};
   const int rank = components > 1 ? 2 : 1;
   Handle space = own(H5Screate_simple(rank, dims, nullptr), H5Sclose, file, "H5Screate_simple");
   Handle dcpl = own(H5Pcreate(H5P_DATASET_CREATE), H5Pclose, file, "H5Pcreate");
@@ -149,11 +151,15 @@ void write_column(hid_t group, const ColumnView& c, const std::string& file, hsi
     check(H5Pset_shuffle(dcpl.get()), file, "H5Pset_shuffle");
     check(H5Pset_deflate(dcpl.get(), 1), file, "H5Pset_deflate");
   }
-  Handle ds = own(H5Dcreate2(group, c.name.c_str(), H5T_IEEE_F64LE, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
-                  H5Dclose, file, "H5Dcreate2('" + c.name + "')");
+  Handle ds = own(H5Dcreate2(group, name.c_str(), file_type, space.get(), H5P_DEFAULT, dcpl.get(), H5P_DEFAULT),
+                  H5Dclose, file, "H5Dcreate2('" + name + "')");
   if (n > 0)
-    check(H5Dwrite(ds.get(), H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, c.values.data()), file,
-          "H5Dwrite('" + c.name + "')");
+    check(H5Dwrite(ds.get(), mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, values), file, "H5Dwrite('" + name + "')");
+}
+
+void write_column(hid_t group, const ColumnView& c, const std::string& file, hsize_t components = 1) {
+  write_array(group, c.name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, c.values.data(), c.values.size() / components,
+              components, file);
 }
 
 std::vector<double> read_all(hid_t ds, const std::string& file, const std::string& name) {
@@ -498,6 +504,34 @@ struct H5Writer::State {
            "  </Geometry>\n" + indent + "</Grid>\n";
   }
 
+  // The triangular mesh (set_mesh: /xdmf/mesh/geometry, (nodes, 3), and topology, (triangles, 3)) as an
+  // unstructured grid named "mesh", its elements indented by `indent`; empty if no mesh was set.
+  std::string background_mesh_xml(hid_t xdmf, const std::string& h5, const std::string& indent) {
+    if (!exists(xdmf, "mesh", partial)) return {};
+    Handle mesh = own(H5Gopen2(xdmf, "mesh", H5P_DEFAULT), H5Gclose, partial, "H5Gopen2('/xdmf/mesh')");
+    // rows and bytes per value of a dataset: the sidecar describes what the file holds, whoever wrote it
+    auto shape = [&](const char* name) {
+      const std::string what = std::string("'/xdmf/mesh/") + name + "'";
+      Handle ds = own(H5Dopen2(mesh.get(), name, H5P_DEFAULT), H5Dclose, partial, "H5Dopen2(" + what + ")");
+      Handle type = own(H5Dget_type(ds.get()), H5Tclose, partial, "H5Dget_type(" + what + ")");
+      const std::size_t size = H5Tget_size(type.get());
+      if (size == 0) fail(partial, "H5Tget_size(" + what + ")");
+      return std::pair{extent0(ds.get(), partial), size};
+    };
+    const auto [nodes, float_size] = shape("geometry");
+    const auto [triangles, int_size] = shape("topology");
+    auto item = [&](const char* name, hsize_t rows, const char* number_type, std::size_t precision) {
+      return indent + "    <DataItem Dimensions=\"" + std::to_string(rows) + " 3\" NumberType=\"" + number_type +
+             "\" Precision=\"" + std::to_string(precision) + "\" Format=\"HDF\">" +
+             xml_escape(h5 + "/xdmf/mesh/" + name) + "</DataItem>\n";
+    };
+    return indent + "<Grid Name=\"mesh\" GridType=\"Uniform\">\n" + indent +
+           "  <Topology TopologyType=\"Triangle\" NumberOfElements=\"" + std::to_string(triangles) + "\">\n" +
+           item("topology", triangles, "Int", int_size) + indent + "  </Topology>\n" + indent +
+           "  <Geometry GeometryType=\"XYZ\">\n" + item("geometry", nodes, "Float", float_size) + indent +
+           "  </Geometry>\n" + indent + "</Grid>\n";
+  }
+
   // The sidecar is built from what the file holds (not from what this writer wrote), so it also covers
   // snapshots of an earlier run continued with append().
   std::string build_xdmf() {
@@ -527,9 +561,10 @@ struct H5Writer::State {
 
     // Relative reference by the final name, so the pair of files can be moved together.
     const std::string h5 = fs::path(path).filename().string() + ":";
-    // ParaView's default reader shows one top-level grid only: with a background grid, each time step is a
-    // spatial collection of the particles and the grid.
-    const std::string mesh = background_grid_xml(xdmf.get(), h5, "        ");
+    // ParaView's default reader shows one top-level grid only: with a background grid or mesh, each time step is a
+    // spatial collection of the particles and the background. (set_grid and set_mesh each remove the other.)
+    const std::string mesh =
+        background_grid_xml(xdmf.get(), h5, "        ") + background_mesh_xml(xdmf.get(), h5, "        ");
     std::ostringstream x;
     x << "<?xml version=\"1.0\" encoding=\"utf-8\"?>\n<Xdmf Version=\"3.0\">\n  <Domain>\n"
       << "    <Grid Name=\"run\" GridType=\"Collection\" CollectionType=\"Temporal\">\n";
@@ -708,9 +743,41 @@ void H5Writer::set_grid(std::span<const std::vector<double>> nodes) {
   s.guard([&] {
     Handle xdmf = s.xdmf_group();
     remove_link(xdmf.get(), "grid", s.partial);  // a continued run sets it again
+    remove_link(xdmf.get(), "mesh", s.partial);  // one background per run: the later replaces the earlier
     Handle g = create_group(xdmf.get(), "grid", s.partial);
     for (std::size_t d = 0; d < nodes.size(); ++d)
       write_column(g.get(), {axis_name(static_cast<int>(d)), nodes[d]}, s.partial);
+  });
+}
+
+void H5Writer::set_mesh(std::span<const std::array<double, 2>> nodes, std::span<const std::array<int, 3>> triangles) {
+  State& s = live("set_mesh");
+  // checked before anything is written: a bad mesh is the caller's error and must not cost the run file (guard)
+  if (s.dimension != 2)
+    throw OutputError("'" + s.path + "': set_mesh: a triangular mesh for a " + std::to_string(s.dimension) +
+                      "D run");
+  if (nodes.empty()) throw OutputError("'" + s.path + "': set_mesh: a mesh without nodes");
+  if (triangles.empty()) throw OutputError("'" + s.path + "': set_mesh: a mesh without triangles");
+  for (std::size_t e = 0; e < triangles.size(); ++e)
+    for (const int k : triangles[e])
+      if (k < 0 || static_cast<std::size_t>(k) >= nodes.size())
+        throw OutputError("'" + s.path + "': set_mesh: triangle " + std::to_string(e) + " has node index " +
+                          std::to_string(k) + ", the mesh has " + std::to_string(nodes.size()) + " nodes (0-based)");
+  s.guard([&] {
+    Handle xdmf = s.xdmf_group();
+    remove_link(xdmf.get(), "mesh", s.partial);  // a continued run sets it again
+    remove_link(xdmf.get(), "grid", s.partial);  // one background per run: the later replaces the earlier
+    Handle g = create_group(xdmf.get(), "mesh", s.partial);
+    // z = 0: an XYZ geometry like the particles' (ParaViewFields), the form ParaView's XDMF3 reader is known to take
+    std::vector<double> xyz(3 * nodes.size(), 0.0);
+    for (std::size_t i = 0; i < nodes.size(); ++i) {
+      xyz[3 * i] = nodes[i][0];
+      xyz[3 * i + 1] = nodes[i][1];
+    }
+    write_array(g.get(), "geometry", H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, xyz.data(), nodes.size(), 3, s.partial);
+    static_assert(sizeof(std::array<int, 3>) == 3 * sizeof(int));  // the triangles are rows of a (T, 3) array
+    write_array(g.get(), "topology", H5T_STD_I32LE, H5T_NATIVE_INT, triangles.data(), triangles.size(), 3,
+                s.partial);
   });
 }
 

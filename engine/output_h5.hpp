@@ -8,12 +8,15 @@
 //   /snapshots/NNNNNN  one group per snapshot (zero-padded step); attributes step, time; one float64 column each
 //   /checkpoint        the latest restartable state; attributes step, time and named scalars; one column each
 //   /xdmf              data for the sidecar only: ids (vertex connectivity), <step>/{geometry, velocity,
-//                      displacement, stress, F} (the columns combined for ParaView) and grid/x0, x1 (, x2): the
-//                      node coordinates of the background grid (set_grid)
+//                      displacement, stress, F} (the columns combined for ParaView) and the background: either
+//                      grid/x0, x1 (, x2), the node coordinates of a rectangular grid (set_grid), or
+//                      mesh/geometry (float64, nodes × 3) and mesh/topology (int32, triangles × 3), a triangular
+//                      mesh (set_mesh)
 //
 // Crash safety comes from the name, not from HDF5: the file is written as `<path>.partial` and renamed to
 // `<path>` only when it is complete, so `<path>` is never a half-written file. The HDF5 C API stays out of this
 // header, so including it does not drag hdf5.h into the engine.
+#include <array>
 #include <memory>
 #include <span>
 #include <stdexcept>
@@ -68,8 +71,13 @@ class H5Writer {
   void write_snapshot(long step, double time, std::span<const ColumnView> columns);
   /// Node coordinates of the background grid, one vector per axis (as many axes as the run's dimension), written
   /// to /xdmf/grid; the sidecar then shows the grid beside the particles in every time step. Replaces an earlier
-  /// grid (a continued run sets it again).
+  /// grid (a continued run sets it again) or mesh (set_mesh): a run has one background.
   void set_grid(std::span<const std::vector<double>> nodes);
+  /// A triangular background mesh (2D runs): node coordinates and counter-clockwise triangles (0-based node
+  /// indices), written to /xdmf/mesh; the sidecar then shows the mesh beside the particles in every time step, as
+  /// set_grid does for the rectangular grid. Replaces an earlier mesh (a continued run sets it again) or grid.
+  /// No nodes, no triangles or a node index out of range: OutputError naming the file (and the triangle).
+  void set_mesh(std::span<const std::array<double, 2>> nodes, std::span<const std::array<int, 3>> triangles);
   /// Writes/overwrites group /checkpoint with attributes step, time, the given columns (any lengths) and the named
   /// scalar attributes; then flushes the file (H5Fflush) so the .partial file is valid after each call.
   void write_checkpoint(long step, double time, std::span<const ColumnView> columns,

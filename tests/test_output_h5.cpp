@@ -2,6 +2,7 @@
 // sidecar, resume by append(), and the error messages.
 #include <catch2/catch.hpp>
 
+#include <array>
 #include <cmath>
 #include <cstdlib>
 #include <cstring>
@@ -236,6 +237,154 @@ TEST_CASE("A 1D background grid is a row of nodes at y = 0", "[output]") {
   const std::string x = slurp(tmp.file("bar.xdmf"));
   CHECK(x.find("<Topology TopologyType=\"2DRectMesh\" Dimensions=\"1 3\"/>") != std::string::npos);
   CHECK(x.find("<DataItem Dimensions=\"1\" Format=\"XML\">0</DataItem>") != std::string::npos);
+}
+
+namespace {
+
+// A unit square split at its centre into four counter-clockwise triangles.
+const std::vector<std::array<double, 2>> kMeshNodes{{0, 0}, {1, 0}, {1, 1}, {0, 1}, {0.5, 0.5}};
+const std::vector<std::array<int, 3>> kMeshTriangles{{0, 1, 4}, {1, 2, 4}, {2, 3, 4}, {3, 0, 4}};
+
+/// The text of each time step's grid in an XDMF sidecar: from its opening tag to the next step's (or the end).
+std::vector<std::string> time_steps(const std::string& xdmf, const std::vector<std::string>& steps) {
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < steps.size(); ++i) {
+    const auto begin = xdmf.find("<Grid Name=\"" + steps[i] + "\"");
+    const auto end = i + 1 < steps.size() ? xdmf.find("<Grid Name=\"" + steps[i + 1] + "\"") : xdmf.size();
+    REQUIRE(begin != std::string::npos);
+    REQUIRE(end != std::string::npos);
+    REQUIRE(begin < end);
+    out.push_back(xdmf.substr(begin, end - begin));
+  }
+  return out;
+}
+
+}  // namespace
+
+TEST_CASE("A triangular background mesh is shown beside the particles in every time step", "[output][mesh]") {
+  TempDir tmp;
+  const std::string path = tmp.file("mesh.h5");
+  const std::vector<double> x0{0.2, 0.7, 0.5}, x1{0.1, 0.9, 0.4};
+  {
+    H5Writer w(path, kScene, 2);
+    w.set_mesh(kMeshNodes, kMeshTriangles);
+    const std::vector<ColumnView> cols{{"x0", x0}, {"x1", x1}};
+    w.write_snapshot(0, 0.0, cols);
+    w.write_snapshot(5, 0.5, cols);
+    w.write_snapshot(9, 0.9, cols);
+    w.discard_after(5, 0.5);  // drops snapshot 9, keeps the mesh
+  }
+  // nodes × 3 with z = 0, and the triangles as written
+  CHECK(same_bits(mpm::read_dataset(path, "/xdmf/mesh/geometry"), {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0, 0.5, 0.5, 0}));
+  CHECK(mpm::read_dataset(path, "/xdmf/mesh/topology") == std::vector<double>{0, 1, 4, 1, 2, 4, 2, 3, 4, 3, 0, 4});
+  CHECK(mpm::list_datasets(path, "/xdmf/mesh") == std::vector<std::string>{"geometry", "topology"});
+  CHECK_THROWS_AS(mpm::read_dataset(path, "/xdmf/grid/x0"), OutputError);
+
+  const std::string x = slurp(tmp.file("mesh.xdmf"));
+  CHECK(count(x, "<Time Value=") == 2);
+  CHECK(count(x, "<Grid Name=\"grid\"") == 0);
+  CHECK(count(x, "<Topology TopologyType=\"Triangle\" NumberOfElements=\"4\">") == 2);
+  CHECK(count(x, "<DataItem Dimensions=\"4 3\" NumberType=\"Int\" Precision=\"4\" Format=\"HDF\">"
+                 "mesh.h5:/xdmf/mesh/topology</DataItem>") == 2);
+  CHECK(count(x, "<DataItem Dimensions=\"5 3\" NumberType=\"Float\" Precision=\"8\" Format=\"HDF\">"
+                 "mesh.h5:/xdmf/mesh/geometry</DataItem>") == 2);
+  // each time step is a spatial collection of the particles and the mesh (ParaView shows one top-level grid)
+  for (const auto& step : time_steps(x, {"000000", "000005"})) {
+    CHECK(count(step, "GridType=\"Collection\" CollectionType=\"Spatial\"") == 1);
+    CHECK(count(step, "<Grid Name=\"particles\" GridType=\"Uniform\">") == 1);
+    CHECK(count(step, "<Grid Name=\"mesh\" GridType=\"Uniform\">") == 1);
+    CHECK(count(step, "TopologyType=\"Triangle\"") == 1);
+    CHECK(count(step, "<Geometry GeometryType=\"XYZ\">") == 2);  // the particles' and the mesh's
+  }
+  CHECK(x.find(tmp.dir.string()) == std::string::npos);
+
+  SECTION("a continued run sets the mesh again, and the new one replaces it") {
+    const std::vector<std::array<double, 2>> nodes{{0, 0}, {1, 0}, {0, 1}};
+    const std::vector<std::array<int, 3>> triangles{{0, 1, 2}};
+    {
+      H5Writer w = H5Writer::append(path);
+      w.set_mesh(nodes, triangles);
+      const std::vector<ColumnView> cols{{"x0", x0}, {"x1", x1}};
+      w.write_snapshot(10, 1.0, cols);
+    }
+    CHECK(mpm::read_dataset(path, "/xdmf/mesh/topology") == std::vector<double>{0, 1, 2});
+    CHECK(same_bits(mpm::read_dataset(path, "/xdmf/mesh/geometry"), {0, 0, 0, 1, 0, 0, 0, 1, 0}));
+    const std::string again = slurp(tmp.file("mesh.xdmf"));
+    CHECK(count(again, "<Topology TopologyType=\"Triangle\" NumberOfElements=\"1\">") == 3);
+    CHECK(count(again, "<Grid Name=\"mesh\" GridType=\"Uniform\">") == 3);
+  }
+}
+
+TEST_CASE("A run has one background: set_mesh and set_grid replace each other", "[output][mesh]") {
+  TempDir tmp;
+  const std::vector<double> x0{0.2, 0.7}, x1{0.1, 0.9}, axis0{0, 0.5, 1}, axis1{0, 1};
+  const std::vector<std::vector<double>> grid{axis0, axis1};
+  const std::vector<ColumnView> cols{{"x0", x0}, {"x1", x1}};
+
+  SECTION("set_mesh after set_grid") {
+    const std::string path = tmp.file("a.h5");
+    {
+      H5Writer w(path, kScene, 2);
+      w.set_grid(grid);
+      w.set_mesh(kMeshNodes, kMeshTriangles);
+      w.write_snapshot(0, 0.0, cols);
+    }
+    CHECK_THROWS_WITH(mpm::list_datasets(path, "/xdmf/grid"), Catch::Contains("/xdmf/grid"));
+    CHECK(mpm::list_datasets(path, "/xdmf/mesh") == std::vector<std::string>{"geometry", "topology"});
+    const std::string x = slurp(tmp.file("a.xdmf"));
+    CHECK(count(x, "<Grid Name=\"mesh\"") == 1);
+    CHECK(count(x, "<Grid Name=\"grid\"") == 0);
+    CHECK(count(x, "2DRectMesh") == 0);
+  }
+
+  SECTION("set_grid after set_mesh, also in a continued run") {
+    const std::string path = tmp.file("b.h5");
+    {
+      H5Writer w(path, kScene, 2);
+      w.set_mesh(kMeshNodes, kMeshTriangles);
+      w.write_snapshot(0, 0.0, cols);
+    }
+    {
+      H5Writer w = H5Writer::append(path);
+      w.set_grid(grid);
+      w.write_snapshot(1, 0.1, cols);
+    }
+    CHECK_THROWS_WITH(mpm::list_datasets(path, "/xdmf/mesh"), Catch::Contains("/xdmf/mesh"));
+    CHECK(same_bits(mpm::read_dataset(path, "/xdmf/grid/x0"), axis0));
+    const std::string x = slurp(tmp.file("b.xdmf"));
+    CHECK(count(x, "<Grid Name=\"grid\"") == 2);
+    CHECK(count(x, "<Grid Name=\"mesh\"") == 0);
+    CHECK(count(x, "Triangle") == 0);
+  }
+}
+
+TEST_CASE("set_mesh rejects a bad mesh naming the file and the triangle, and the run goes on", "[output][mesh]") {
+  TempDir tmp;
+  const std::string path = tmp.file("bad.h5");
+  H5Writer w(path, kScene, 2);
+  const std::vector<std::array<double, 2>> no_nodes;
+  const std::vector<std::array<int, 3>> no_triangles;
+  CHECK_THROWS_WITH(w.set_mesh(no_nodes, kMeshTriangles), Catch::Contains(path) && Catch::Contains("without nodes"));
+  CHECK_THROWS_WITH(w.set_mesh(kMeshNodes, no_triangles),
+                    Catch::Contains(path) && Catch::Contains("without triangles"));
+  const std::vector<std::array<int, 3>> past_end{{0, 1, 4}, {1, 2, 5}}, negative{{0, 1, 4}, {1, 2, 4}, {-1, 3, 4}};
+  CHECK_THROWS_AS(w.set_mesh(kMeshNodes, past_end), OutputError);
+  CHECK_THROWS_WITH(w.set_mesh(kMeshNodes, past_end),
+                    Catch::Contains(path) && Catch::Contains("triangle 1 has node index 5, the mesh has 5 nodes"));
+  CHECK_THROWS_WITH(w.set_mesh(kMeshNodes, negative), Catch::Contains(path) && Catch::Contains("triangle 2"));
+  {
+    H5Writer w3(tmp.file("cube.h5"), R"({"dimension": 3})", 3);
+    CHECK_THROWS_WITH(w3.set_mesh(kMeshNodes, kMeshTriangles), Catch::Contains("3D run"));
+  }
+  // the rejected meshes wrote nothing and cost nothing: the writer still works
+  const std::vector<double> x0{0.5}, x1{0.5};
+  const std::vector<ColumnView> cols{{"x0", x0}, {"x1", x1}};
+  w.write_snapshot(0, 0.0, cols);
+  w.close();
+  CHECK(mpm::list_snapshots(path) == std::vector<std::string>{"000000"});
+  CHECK_THROWS_AS(mpm::list_datasets(path, "/xdmf/mesh"), OutputError);
+  CHECK(count(slurp(tmp.file("bad.xdmf")), "<Grid Name=\"mesh\"") == 0);
+  CHECK_THROWS_AS(w.set_mesh(kMeshNodes, kMeshTriangles), OutputError);  // after close
 }
 
 TEST_CASE("append() continues a run after its checkpoint", "[output]") {
