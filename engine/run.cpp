@@ -18,6 +18,7 @@
 #include <tbb/info.h>
 
 #include "engine/energy_balance.hpp"
+#include "engine/mesh_simulation.hpp"
 #include "engine/output_h5.hpp"
 #include "engine/simulation.hpp"
 
@@ -43,8 +44,8 @@ long guard_interval(long total_steps) {
 
 /// The per-step check of time.cfl: dt was fixed at the start from the initial state; it must stay below the
 /// critical step of the current one (same definition, Simulation::critical_step).
-template <int Dim>
-void check_cfl(const Simulation<Dim>& sim) {
+template <class Sim>
+void check_cfl(const Sim& sim) {
   const CriticalStep c = sim.critical_step();
   if (sim.dt() <= c.dt) return;
   const auto& s = sim.particles();
@@ -54,7 +55,7 @@ void check_cfl(const Simulation<Dim>& sim) {
                         "%.6g s by a factor %.4g (h = %.4g m); particle %zu at x = (",
                         sim.steps_done(), sim.time(), sim.dt(), critical_step_formula(c).c_str(), c.dt,
                         sim.dt() / c.dt, c.h, c.particle);
-  for (int d = 0; d < Dim && n < static_cast<int>(sizeof buf); ++d)
+  for (int d = 0; d < Sim::dim && n < static_cast<int>(sizeof buf); ++d)
     n += std::snprintf(buf + n, sizeof buf - n, "%s%.6g", d ? ", " : "", s.column(Field::position, d)[c.particle]);
   if (n < static_cast<int>(sizeof buf))
     std::snprintf(buf + n, sizeof buf - n,
@@ -117,8 +118,8 @@ class StopOnSignals {
   void (*old_term_)(int);
 };
 
-template <int Dim>
-std::vector<ColumnView> columns_of(const ParticleStore<Dim>& store) {
+template <class Store>
+std::vector<ColumnView> columns_of(const Store& store) {
   std::vector<ColumnView> cols;
   for (const auto& name : store.column_names()) cols.push_back({name, store.column(name)});
   return cols;
@@ -145,8 +146,8 @@ struct StartPoint {
 };
 
 /// Written from the particle columns themselves: a copy of the state would add the store's size to the peak memory.
-template <int Dim>
-void write_checkpoint(H5Writer& out, const Simulation<Dim>& sim, const EnergyBalance& balance, double drift_max,
+template <class Sim>
+void write_checkpoint(H5Writer& out, const Sim& sim, const EnergyBalance& balance, double drift_max,
                       const ExactScale& scale) {
   const Conservation& c = sim.conservation();
   const EnergyBalance::State& b = balance.state();
@@ -179,8 +180,8 @@ class StateBackup {
   StateBackup(const StateBackup&) = delete;
   StateBackup& operator=(const StateBackup&) = delete;
 
-  template <int Dim>
-  void save(const Simulation<Dim>& sim) {
+  template <class Sim>
+  void save(const Sim& sim) {
     state_.step = sim.steps_done();
     state_.time = sim.time();
     state_.conservation = sim.conservation();
@@ -247,7 +248,7 @@ using OpenOutput = std::function<std::optional<H5Writer>()>;
 /// One run, phase by phase: set up (the simulation, the run file, the guards; or the state to resume), step to
 /// the end (guards, metrics, snapshots, checkpoints, signals), recover the last good state when the run became
 /// unstable, and summarise.
-template <int Dim>
+template <class Sim>
 class Run {
  public:
   Run(const Scene& scene, const RunOptions& options, int threads, const OpenOutput& open_output,
@@ -368,17 +369,22 @@ class Run {
   }
 
  private:
-  /// The metrics' columns and the grid (the knots of the uniform grid on [0, length], for the sidecar).
+  /// The metrics' columns and the background: the knots of the uniform grid on [0, length], or the triangle mesh.
   void describe_output() {
     std::vector<std::string> names{"step", "t", "kinetic_energy", "strain_energy", "total_energy",
                                    "mass_rel_max", "momentum_rel_max"};
     if (sim_.has_exact())
       for (const char* e : {"displacement_rms", "velocity_rms", "stress_rms"}) names.push_back(e);
     out_->set_metric_names(names);
-    std::vector<std::vector<double>> nodes(Dim);
-    for (int d = 0; d < Dim; ++d)
-      for (int i = 0; i <= scene_.grid.cells[d]; ++i) nodes[d].push_back(scene_.grid.length[d] * i / scene_.grid.cells[d]);
-    out_->set_grid(nodes);
+    if constexpr (std::is_same_v<Sim, MeshSimulation>) {
+      out_->set_mesh(sim_.mesh().nodes(), sim_.mesh().triangles());
+    } else {
+      std::vector<std::vector<double>> nodes(Sim::dim);
+      for (int d = 0; d < Sim::dim; ++d)
+        for (int i = 0; i <= scene_.grid.cells[d]; ++i)
+          nodes[d].push_back(scene_.grid.length[d] * i / scene_.grid.cells[d]);
+      out_->set_grid(nodes);
+    }
   }
 
   /// The energy guard and the metrics, each at its own interval (and at the end).
@@ -424,7 +430,7 @@ class Run {
   const Scene& scene_;
   const int threads_;
   RunResult result_;
-  Simulation<Dim> sim_;
+  Sim sim_;
   std::optional<H5Writer> out_;
   EnergyBalance balance_;
   double drift_max_ = 0.0, energy0_ = 0.0;
@@ -439,16 +445,24 @@ class Run {
   long steps_timed_ = 0;
 };
 
-template <int Dim>
-RunResult run_dim(const Scene& scene, const RunOptions& options, int threads, const OpenOutput& open_output,
-                  const std::optional<StartPoint>& start) {
-  Run<Dim> run(scene, options, threads, open_output, start);
+template <class Sim>
+RunResult run_with(const Scene& scene, const RunOptions& options, int threads, const OpenOutput& open_output,
+                   const std::optional<StartPoint>& start) {
+  Run<Sim> run(scene, options, threads, open_output, start);
   try {
     run.step_to_end();
   } catch (const UnstableRun& e) {
     run.recover_last_good_state(e);
   }
   return run.finish();
+}
+
+/// The simulation a scene runs: on its triangle mesh, or on the rectangular grid of its dimension.
+RunResult run_scene_from(const Scene& scene, const RunOptions& options, int threads, const OpenOutput& open_output,
+                         const std::optional<StartPoint>& start) {
+  if (scene.grid.triangles) return run_with<MeshSimulation>(scene, options, threads, open_output, start);
+  return scene.dimension == 1 ? run_with<Simulation<1>>(scene, options, threads, open_output, start)
+                              : run_with<Simulation<2>>(scene, options, threads, open_output, start);
 }
 
 RunResult invalid(const std::string& message) {
@@ -479,8 +493,7 @@ RunResult run_scene(const Scene& scene, const RunOptions& options) {
       if (path.empty()) return std::nullopt;
       return H5Writer(path, scene.source.dump(), scene.dimension);
     };
-    return scene.dimension == 1 ? run_dim<1>(scene, options, threads, open, std::nullopt)
-                                : run_dim<2>(scene, options, threads, open, std::nullopt);
+    return run_scene_from(scene, options, threads, open, std::nullopt);
   });
 }
 
@@ -498,8 +511,7 @@ RunResult resume_run(const std::string& path, const RunOptions& options) {
       return invalid("--resume " + path + ": no usable checkpoint (" + std::string(e.what()) + ")");
     }
     const OpenOutput open = [&]() -> std::optional<H5Writer> { return H5Writer::append(path); };
-    return scene.dimension == 1 ? run_dim<1>(scene, options, threads, open, start)
-                                : run_dim<2>(scene, options, threads, open, start);
+    return run_scene_from(scene, options, threads, open, start);
   });
 }
 

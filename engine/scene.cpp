@@ -5,6 +5,8 @@
 // Scene::source is rebuilt from the typed result, so it records every default exactly as it will run.
 #include "engine/scene.hpp"
 
+#include "engine/triangle_mesh.hpp"
+
 #include <unistd.h>
 
 #include <algorithm>
@@ -133,7 +135,7 @@ struct Node {
 /// Where a key misplaced at the top level belongs, for the "did you mean" hint.
 const std::vector<std::pair<std::string, Keys>>& sections() {
   static const std::vector<std::pair<std::string, Keys>> s = {
-      {"grid", {"length", "cells", "basis", "basis_path", "maxent_dmax"}},
+      {"grid", {"length", "cells", "mesh", "basis", "basis_path", "maxent_dmax"}},
       {"particles", {"per_cell", "layout", "seed"}},
       {"material", {"model", "E", "nu", "density"}},
       {"algorithm", {"update", "mass", "mapping", "gauss_per_cell", "mls_support", "tls_degree", "ddmpm_subpoints"}},
@@ -279,11 +281,12 @@ std::array<int, 3> integers(const Node& n, const std::string& key, int dim, std:
 // ---------------------------------------------------------------------------------------------------------
 // Names
 
-constexpr std::array<std::pair<const char*, Basis>, 5> kBasis{{{"linear", Basis::linear},
+constexpr std::array<std::pair<const char*, Basis>, 6> kBasis{{{"linear", Basis::linear},
                                                               {"bspline2", Basis::bspline2},
                                                               {"bspline3", Basis::bspline3},
                                                               {"ddmpm", Basis::ddmpm},
-                                                              {"maxent", Basis::maxent}}};
+                                                              {"maxent", Basis::maxent},
+                                                              {"powell-sabin", Basis::powell_sabin}}};
 constexpr std::array<std::pair<const char*, BasisPath>, 2> kPath{{{"fast", BasisPath::fast}, {"generic", BasisPath::generic}}};
 constexpr std::array<std::pair<const char*, Layout>, 3> kLayout{
     {{"uniform", Layout::uniform}, {"gauss", Layout::gauss}, {"random", Layout::random}}};
@@ -386,7 +389,7 @@ json material_json(const MaterialSpec& m) {
 /// Refuses a scene whose particles could not fit in memory, before anything is allocated.
 void check_memory(const Scene& s, const json& cells) {
   constexpr double bytes_per_particle = 250.0, engine_limit = 2e8;
-  double particles = 1;
+  double particles = s.grid.triangles ? static_cast<double>(s.grid.triangles->triangle_count()) : 1.0;
   for (int i = 0; i < s.dimension; ++i) particles *= s.grid.cells[i];
   for (int i = 0; i < s.dimension; ++i) particles *= s.particles.per_cell[i];  // random: per_cell = {total, 1, 1}
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGE_SIZE);
@@ -394,7 +397,7 @@ void check_memory(const Scene& s, const json& cells) {
   if (pages > 0 && page > 0) limit = std::min(limit, static_cast<double>(pages) * static_cast<double>(page) / bytes_per_particle);
   if (particles <= limit) return;
   const double gib = bytes_per_particle / 1073741824.0;
-  fail("grid.cells", cells, "would need " + approx(particles) + " particles ≈ " + approx(particles * gib) +
+  fail(s.grid.triangles ? "grid.mesh" : "grid.cells", cells, "would need " + approx(particles) + " particles ≈ " + approx(particles * gib) +
                                 " GiB; this machine's limit is " + approx(limit) + " particles (≈ " + approx(limit * gib) +
                                 " GiB at ~250 bytes each)");
 }
@@ -416,10 +419,14 @@ json source_of(const Scene& s, const ProblemInfo* info) {
            : k == "max_body_force" ? q.max_body_force : q.ramp_time;
     j["problem"] = p;
   }
-  j["grid"] = {{"length", vec(s.grid.length)}, {"cells", vec(s.grid.cells)}, {"basis", name_of(s.grid.basis, kBasis)},
-               {"basis_path", name_of(s.grid.path, kPath)}};
+  if (s.grid.triangles)
+    j["grid"] = {{"length", vec(s.grid.length)}, {"mesh", s.grid.mesh}, {"basis", name_of(s.grid.basis, kBasis)}};
+  else
+    j["grid"] = {{"length", vec(s.grid.length)}, {"cells", vec(s.grid.cells)}, {"basis", name_of(s.grid.basis, kBasis)},
+                 {"basis_path", name_of(s.grid.path, kPath)}};
   if (s.grid.basis == Basis::maxent) j["grid"]["maxent_dmax"] = s.grid.maxent_dmax;
-  j["particles"] = {{"per_cell", s.particles.layout == Layout::random ? json(s.particles.per_cell[0]) : vec(s.particles.per_cell)},
+  const bool total = s.particles.layout == Layout::random || s.grid.triangles;
+  j["particles"] = {{"per_cell", total ? json(s.particles.per_cell[0]) : vec(s.particles.per_cell)},
                     {"layout", name_of(s.particles.layout, kLayout)}, {"seed", s.particles.seed}};
   j["material"] = material_json(s.material);
   const AlgorithmSpec& a = s.algorithm;
@@ -449,13 +456,34 @@ json source_of(const Scene& s, const ProblemInfo* info) {
 
 // One reader per section of the scene; each fills its part of `s` and may read what earlier sections set.
 
+/// A triangle mesh instead of cells (thesis §3.3, ch. 6): 2D, the P1 or Powell–Sabin basis; the file is read and
+/// checked here, so `mpm validate` refuses a bad mesh naming the file and the element.
+void read_mesh(const Node& grid, Scene& s) {
+  const json& mesh = *grid.find("mesh");
+  if (!mesh.is_string() || mesh.get<std::string>().empty()) fail("grid.mesh", mesh, "expected the path of a Gmsh mesh file");
+  if (s.dimension != 2) fail("grid.mesh", mesh, "a triangle mesh needs dimension 2, not " + std::to_string(s.dimension));
+  if (const json* cells = grid.find("cells"))
+    fail("grid.cells", *cells, "expected either grid.cells or grid.mesh, not both");
+  if (const json* path = grid.find("basis_path")) fail("grid.basis_path", *path, "a triangle mesh has one path; leave it out");
+  if (const json* d = grid.find("maxent_dmax")) fail("grid.maxent_dmax", *d, "it applies to grid.basis = \"maxent\" only");
+  s.grid.basis = choice(grid, "basis", Basis::linear, kBasis);
+  if (s.grid.basis != Basis::linear && s.grid.basis != Basis::powell_sabin)
+    fail("grid.basis", *grid.find("basis"), "on a triangle mesh expected \"linear\" or \"powell-sabin\"");
+  s.grid.mesh = mesh.get<std::string>();
+  s.grid.triangles = std::make_shared<const TriangleMesh>(read_gmsh(s.grid.mesh, {s.grid.length[0], s.grid.length[1]}));
+}
+
 void read_grid(const Node& top, Scene& s, const ProblemInfo* info) {
   const int dim = s.dimension;
   const std::string arr = "an array of " + std::to_string(dim) + " ";
   const Node grid = object_at(top.find("grid"), "grid", section_keys("grid"));
   s.grid.length = numbers(grid, "length", dim, std::nullopt, positive, arr + "positive numbers (m)");
+  if (grid.find("mesh")) return read_mesh(grid, s);
   s.grid.cells = integers(grid, "cells", dim, std::nullopt, 1, 1 << 20, arr + "integers ≥ 1 and ≤ 1048576");
   s.grid.basis = choice(grid, "basis", Basis::bspline2, kBasis);
+  if (s.grid.basis == Basis::powell_sabin)
+    fail("grid.basis", *grid.find("basis"), "Powell–Sabin splines live on a triangle mesh: give grid.mesh (a Gmsh file) "
+                                            "instead of grid.cells");
   // The fast path exists for linear and quadratic only, so an unspecified path follows the basis.
   s.grid.path = choice(grid, "basis_path", s.grid.basis == Basis::bspline3 ? BasisPath::generic : BasisPath::fast, kPath);
   if (s.grid.basis == Basis::bspline3 && s.grid.path == BasisPath::fast)
@@ -476,6 +504,40 @@ void read_grid(const Node& top, Scene& s, const ProblemInfo* info) {
     fail("grid.length", *grid.find("length"), "expected grid.length.0 ≥ 1 (the bar occupies [0, 1] m)");
 }
 
+void read_seed(const Node& part, ParticleSpec& p) {
+  if (const json* seed = part.find("seed")) {
+    if (seed->is_number_unsigned()) p.seed = seed->get<std::uint64_t>();
+    else if (auto x = integer_value(*seed); x && *x >= 0) p.seed = static_cast<std::uint64_t>(*x);
+    else fail("particles.seed", *seed, "expected a non-negative integer");
+  }
+}
+
+/// Particles per triangle: `[N]` (or N); the uniform layout puts them at the centroids of N equal sub-triangles,
+/// which needs N = k², 3k² or 6k² (MeshSimulation); the random layout takes any N.
+void read_triangle_particles(const Node& part, const json* per_cell, Basis basis, ParticleSpec& p) {
+  if (p.layout == Layout::gauss)
+    fail("particles.layout", *part.find("layout"), "on a triangle mesh expected \"uniform\" or \"random\"");
+  const std::string expected = "[N] particles per triangle, N in 1..384";
+  if (!per_cell) missing("particles.per_cell", expected);
+  const json& n = per_cell->is_array() && per_cell->size() == 1 ? (*per_cell)[0] : *per_cell;
+  const auto count = integer_value(n);
+  if (!count || *count < 1 || *count > 384) fail("particles.per_cell", *per_cell, "expected " + expected);
+  const auto square = [](long long x) { const long long r = std::llround(std::sqrt(static_cast<double>(x))); return r * r == x; };
+  if (p.layout == Layout::uniform && !square(*count) && !(*count % 3 == 0 && square(*count / 3)) &&
+      !(*count % 6 == 0 && square(*count / 6)))
+    fail("particles.per_cell", *per_cell, "the uniform layout on triangles places k², 3k² or 6k² particles "
+                                          "(1, 3, 4, 6, 9, 12, 16, 24, 25, 27, ...); use one of them or layout \"random\"");
+  if (basis == Basis::powell_sabin) {
+    const long long each = *count / 6;  // the six parts of a Powell–Sabin split share a triangle's particles
+    if (*count % 6 != 0 || (p.layout == Layout::uniform && !square(each)))
+      fail("particles.per_cell", *per_cell, "with grid.basis = \"powell-sabin\" each of a triangle's six split "
+                                            "triangles gets N/6 particles: expected N = 6k² (6, 24, 54, 96, ...) for "
+                                            "the uniform layout, a multiple of 6 for the random one");
+  }
+  p.per_cell = {static_cast<int>(*count), 1, 1};
+  read_seed(part, p);
+}
+
 void read_particles(const Node& top, Scene& s) {
   const int dim = s.dimension;
   const std::string arr = "an array of " + std::to_string(dim) + " ";
@@ -483,6 +545,7 @@ void read_particles(const Node& top, Scene& s) {
   ParticleSpec& p = s.particles;
   p.layout = choice(part, "layout", Layout::uniform, kLayout);
   const json* per_cell = part.find("per_cell");
+  if (!s.grid.mesh.empty()) return read_triangle_particles(part, per_cell, s.grid.basis, p);
   if (p.layout == Layout::random && per_cell && !per_cell->is_array()) {
     // random takes a total per cell, kept in per_cell[0] (scene.hpp)
     const long long most = static_cast<long long>(std::pow(64, dim));
@@ -496,11 +559,7 @@ void read_particles(const Node& top, Scene& s) {
                               (p.layout == Layout::gauss ? " (the gauss layout has at most 10 points per axis)" : ""));
     if (p.layout == Layout::random) p.per_cell = {p.per_cell[0] * p.per_cell[1] * p.per_cell[2], 1, 1};
   }
-  if (const json* seed = part.find("seed")) {
-    if (seed->is_number_unsigned()) p.seed = seed->get<std::uint64_t>();
-    else if (auto x = integer_value(*seed); x && *x >= 0) p.seed = static_cast<std::uint64_t>(*x);
-    else fail("particles.seed", *seed, "expected a non-negative integer");
-  }
+  read_seed(part, p);
 }
 
 /// OTM (thesis §4.2.1) is defined for consistent bases, piecewise-linear or max-ent; the unified approach
@@ -523,6 +582,24 @@ void check_moving_basis(const Node& alg, const Scene& s) {
                                          name_of(a.mapping, kMapping) + "\"");
 }
 
+/// On a triangle mesh: USL or MUSL with the lumped mass (thesis §3.4.4, §6.3.1); the TLS reconstruction with the
+/// P1 basis (thesis §6.1.2), direct mapping with either basis.
+void check_mesh_algorithm(const Node& alg, const Scene& s) {
+  const AlgorithmSpec& a = s.algorithm;
+  if (a.update != Update::usl && a.update != Update::musl)
+    fail("algorithm.update", *alg.find("update"), "on a triangle mesh (grid.mesh) expected \"usl\" or \"musl\"");
+  if (a.mass != MassMatrix::lumped)
+    fail("algorithm.mass", *alg.find("mass"), "on a triangle mesh (grid.mesh) expected \"lumped\"");
+  if (a.mapping != Mapping::direct && a.mapping != Mapping::tls)
+    fail("algorithm.mapping", *alg.find("mapping"), "on a triangle mesh (grid.mesh) expected \"direct\" or \"tls\"");
+  if (a.mapping == Mapping::tls && s.grid.basis != Basis::linear)
+    fail("algorithm.mapping", *alg.find("mapping"),
+         "the TLS reconstruction on triangles is defined with grid.basis = \"linear\" (thesis §6.1.2), not \"" +
+             name_of(s.grid.basis, kBasis) + "\"");
+  if (const json* g = alg.find("gauss_per_cell"))
+    fail("algorithm.gauss_per_cell", *g, "a triangle has its own Gauss rule (6 points); leave it out");
+}
+
 void read_algorithm(const Node& top, Scene& s) {
   const int dim = s.dimension;
   const Node alg = object_at(top.find("algorithm"), "algorithm", section_keys("algorithm"));
@@ -537,6 +614,7 @@ void read_algorithm(const Node& top, Scene& s) {
   a.tls_degree = static_cast<int>(integer(alg, "tls_degree", 1, 0, 2, "0, 1 or 2"));
   a.ddmpm_subpoints = static_cast<int>(integer(alg, "ddmpm_subpoints", 1, 1, 1024, "an integer in 1..1024"));
   if (basis_moves_with_body(a.update)) check_moving_basis(alg, s);
+  if (s.grid.triangles) check_mesh_algorithm(alg, s);
   if (const json* sub = alg.find("ddmpm_subpoints"); sub && a.ddmpm_subpoints > 1) {
     // the sub-point integration of Dhakal & Zhang replaces DDMPM's particle integration of the force in 1D
     if (s.grid.basis != Basis::ddmpm)
@@ -671,7 +749,7 @@ Scene parse_scene(const json& j) {
 
   read_grid(top, s, info);
   read_particles(top, s);
-  check_memory(s, *top.find("grid")->find("cells"));
+  check_memory(s, *top.find("grid")->find(s.grid.triangles ? "mesh" : "cells"));
   // a partial material is completed from the problem's (or the generic) default
   s.material = read_material(top.find("material"), "material", info ? info->material : MaterialSpec{});
   read_algorithm(top, s);
@@ -762,7 +840,14 @@ json read_json_file(const std::string& path) {
   std::ostringstream text;
   text << in.rdbuf();
   if (in.bad()) throw SceneError(one_line("scene: cannot read " + path + ": " + std::strerror(errno)));
-  return read_json_text(text.str(), path);
+  json scene = read_json_text(text.str(), path);
+  // a relative mesh path is relative to the scene file, wherever the run starts
+  if (auto grid = scene.find("grid"); scene.is_object() && grid != scene.end() && grid->is_object())
+    if (auto mesh = grid->find("mesh"); mesh != grid->end() && mesh->is_string() && !mesh->get<std::string>().empty()) {
+      const std::filesystem::path m(mesh->get<std::string>());
+      if (m.is_relative()) *mesh = (std::filesystem::path(path).parent_path() / m).lexically_normal().string();
+    }
+  return scene;
 }
 
 Scene load_scene_file(const std::string& path) { return parse_scene(read_json_file(path)); }

@@ -3,6 +3,7 @@
 // Every field has been range-checked by parse_scene(); the engine never sees raw JSON.
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -12,12 +13,14 @@
 
 namespace mpm {
 
+class TriangleMesh;
+
 /// A scene that cannot be run: the message names the key (dotted path), the value and what was expected.
 struct SceneError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-enum class Basis { linear, bspline2, bspline3, ddmpm, maxent };
+enum class Basis { linear, bspline2, bspline3, ddmpm, maxent, powell_sabin };
 enum class BasisPath { fast, generic };
 enum class Layout { uniform, gauss, random };
 enum class MaterialModel { linear_elastic, neo_hookean };
@@ -32,7 +35,7 @@ constexpr bool basis_moves_with_body(Update u) { return u == Update::otm || u ==
 
 /// Polynomial degree of a basis choice (DDMPM: its piecewise-linear values; max-ent: linear completeness).
 constexpr int degree_of(Basis b) {
-  return b == Basis::bspline2 ? 2 : b == Basis::bspline3 ? 3 : 1;
+  return b == Basis::bspline2 || b == Basis::powell_sabin ? 2 : b == Basis::bspline3 ? 3 : 1;
 }
 
 /// DDMPM and max-ent number their functions with a ghost at each end of an axis (kernels/dual_domain.hpp).
@@ -59,6 +62,8 @@ struct GridSpec {
   Basis basis = Basis::bspline2;
   BasisPath path = BasisPath::fast;
   double maxent_dmax = 2.0;  ///< max-ent prior support radius in cells (thesis eq. 4.47, d_max; 1 < d_max ≤ 2)
+  std::string mesh;          ///< a triangle mesh file (2D) instead of `cells`; empty: the rectangular grid
+  std::shared_ptr<const TriangleMesh> triangles;  ///< that mesh, read and checked by parse_scene
 };
 
 struct ParticleSpec {
