@@ -48,10 +48,18 @@ class ConsistentMassSolver {
   template <int S, class Free>
   int solve(int stride1, const std::vector<double>& lumped, const Free& free, std::array<std::vector<double>, Dim>& x,
             const std::array<std::vector<double>, Dim>& rhs) {
+    return solve_with([&](const auto& in, auto& out) { multiply<S>(stride1, in, out); }, lumped, free, x, rhs);
+  }
+
+  /// x = M⁻¹ rhs as solve does, for an M that `apply_mass(x, y)` applies (y = M x, all components), e.g. a mesh's
+  /// sparse M (MeshSimulation).
+  template <class Multiply, class Free>
+  int solve_with(const Multiply& apply_mass, const std::vector<double>& lumped, const Free& free,
+                 std::array<std::vector<double>, Dim>& x, const std::array<std::vector<double>, Dim>& rhs) {
     const double* m = lumped.data();
     // start from the lumped solution, masked
     for_each_dof([&](int d, std::size_t i) { x[d][i] = free(d, i) ? rhs[d][i] / m[i] : 0.0; });
-    multiply<S>(stride1, x, Ap_);
+    apply_mass(x, Ap_);
     for_each_dof([&](int d, std::size_t i) {
       const bool f = free(d, i);
       r_[d][i] = f ? rhs[d][i] - Ap_[d][i] : 0.0;
@@ -72,7 +80,7 @@ class ConsistentMassSolver {
         all_done = all_done && done[d];
       }
       if (all_done) break;
-      multiply<S>(stride1, p_, Ap_);
+      apply_mass(p_, Ap_);
       for (int d = 0; d < Dim; ++d)
         if (!done[d]) rz[d] = iterate(d, free, m, rz[d], x[d]);
     }

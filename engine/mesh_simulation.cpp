@@ -133,6 +133,10 @@ MeshSimulation::MeshSimulation(const Scene& scene)
     for (auto* a : {&grid_.q[d], &grid_.f[d], &grid_.v[d], &grid_.a[d]}) a->assign(functions, 0.0);
     grid_.fixed[d].assign(functions, 0);
   }
+  if (scene.algorithm.mass != MassMatrix::lumped) {
+    std::visit([&](const auto& b) { mass_matrix_.emplace(mesh(), b); }, basis_);
+    mass_solver_.emplace(static_cast<int>(functions));
+  }
   for (int side : scene.fixed_sides)
     for (std::size_t f = 0; f < functions; ++f)
       if (std::visit([&](const auto& b) { return b.touches_side(f, side); }, basis_)) grid_.fixed[side / 2][f] = 1;
@@ -150,6 +154,12 @@ MeshSimulation::MeshSimulation(const Scene& scene)
 }
 
 MeshSimulation::~MeshSimulation() = default;
+
+CriticalStep MeshSimulation::critical_step() const {
+  // the consistent mass: P1's factor, the smallest of consistent_mass_step_factor (Powell–Sabin's is not derived)
+  const double kappa = scene_.algorithm.mass == MassMatrix::consistent ? consistent_mass_step_factor(Basis::linear, 2) : 1.0;
+  return critical_step_of(store_, material_, mesh().min_height(), kappa);
+}
 
 void MeshSimulation::load_state(const SimulationState& state) {
   load_particle_columns(store_, state);
@@ -364,18 +374,61 @@ class MeshSimulation::Step {
 
   bool free_dof(int d, std::size_t i) const { return sim_.grid_.m[i] > sim_.empty_mass_ && !sim_.grid_.fixed[d][i]; }
 
-  /// a = f/m (eq. 2.34); v = q/m (eqs 2.35, 2.49), advanced by Δt a in USL (eq. 2.36); fixed and empty functions 0.
-  void grid_update(bool acceleration, bool velocity) {
-    MeshGrid& g = sim_.grid_;
-    const bool usl = acceleration && velocity;
+  /// out = in / m on the free functions (the lumped mass), 0 elsewhere.
+  void divide_by_lumped_mass(std::array<std::vector<double>, 2>& out, const std::array<std::vector<double>, 2>& in) {
+    const MeshGrid& g = sim_.grid_;
     parallel_over(g.m.size(), 4096, [&](std::size_t b, std::size_t e) {
       for (std::size_t i = b; i < e; ++i)
-        for (int d = 0; d < 2; ++d) {
-          const bool free = free_dof(d, i);
-          if (acceleration) g.a[d][i] = free ? g.f[d][i] / g.m[i] : 0.0;
-          if (velocity) g.v[d][i] = free ? g.q[d][i] / g.m[i] + (usl ? dt_ * g.a[d][i] : 0.0) : 0.0;
-        }
+        for (int d = 0; d < 2; ++d) out[d][i] = free_dof(d, i) ? in[d][i] / g.m[i] : 0.0;
     });
+  }
+
+  /// x = M⁻¹ rhs with the consistent mass of the particles (thesis eqs 3.9–3.10), assembled at the step's first
+  /// solve: the particles stay where they are until the step's last gather.
+  void solve_consistent(std::array<std::vector<double>, 2>& x, const std::array<std::vector<double>, 2>& rhs) {
+    MeshMassMatrix& mass = *sim_.mass_matrix_;
+    if (!mass_assembled_) {
+      mass.clear();
+      const TriangleMesh& mesh = sim_.mesh();
+      for (int c = 0; c < mesh.colours(); ++c) {
+        const int first = mesh.colour_start(c), last = mesh.colour_start(c + 1);
+        parallel_over(last - first, element_grain, [&](std::size_t b, std::size_t e) {
+          std::array<int, K> idx;
+          std::array<double, K> w;
+          std::array<Point2, K> grad;
+          for (std::size_t k = first + b; k < first + e; ++k) {
+            const int element = mesh.elements_by_colour()[k];
+            for_particles_of(element, [&](std::size_t p) {
+              basis_.evaluate(element, {pv_.x[0][p], pv_.x[1][p]}, idx, w, grad);
+              mass.add(element, w, pv_.m[p]);
+            });
+          }
+        });
+      }
+      mass_assembled_ = true;
+    }
+    sim_.cg_iterations_ += sim_.mass_solver_->solve_with(
+        [&](const auto& in, auto& out) { mass.multiply(in, out); }, sim_.grid_.m,
+        [&](int d, std::size_t i) { return free_dof(d, i); }, x, rhs);
+  }
+
+  /// a = M⁻¹ f (eq. 2.34); v = M⁻¹ q (eqs 2.35, 2.49), advanced by Δt a in USL (eq. 2.36); fixed and empty
+  /// functions 0. The lumped M, or the consistent one for the velocities (projection) or both (consistent).
+  void grid_update(bool acceleration, bool velocity) {
+    MeshGrid& g = sim_.grid_;
+    const MassMatrix mass = sim_.scene_.algorithm.mass;
+    if (acceleration) {
+      if (mass == MassMatrix::consistent) solve_consistent(g.a, g.f);
+      else divide_by_lumped_mass(g.a, g.f);
+    }
+    if (!velocity) return;
+    if (mass != MassMatrix::lumped) solve_consistent(g.v, g.q);
+    else divide_by_lumped_mass(g.v, g.q);
+    if (acceleration)  // USL
+      parallel_over(g.m.size(), 4096, [&](std::size_t b, std::size_t e) {
+        for (std::size_t i = b; i < e; ++i)
+          for (int d = 0; d < 2; ++d) g.v[d][i] += dt_ * g.a[d][i];
+      });
   }
 
   /// G2P (eqs 2.37–2.41): the particle velocity from the accelerations, the position and F from the velocities,
@@ -430,11 +483,13 @@ class MeshSimulation::Step {
   const double dt_;
   const ParticleView<2> pv_;
   tbb::enumerable_thread_specific<std::vector<TriangleSample>> own_, near_;
+  bool mass_assembled_ = false;  ///< the consistent mass of this step's particles is in sim_.mass_matrix_
 };
 
 void MeshSimulation::step() {
   const double dt = step_ + 1 == steps_total_ ? scene_.time.end - dt_ * step_ : dt_;
   locate_particles();
+  cg_iterations_ = 0;
   const BodyForce<2> body = problem_->body_force(time_, reference_columns_of(store_));
   std::visit(
       [&](const auto& basis, const auto& material, const auto& force) {

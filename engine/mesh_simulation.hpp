@@ -1,14 +1,17 @@
 #pragma once
 // One explicit MPM run on a triangular background mesh (thesis §3.3, §6.1.2, §6.3.1): MPM with the P1 basis, with
 // or without the TLS reconstruction, and PS-MPM with quadratic Powell–Sabin splines; USL or MUSL with the lumped
-// mass. The particles are located in their triangles by the mesh's bucket grid every step, and the scatter runs
+// mass, or with the consistent mass for the velocities (projection) or everywhere. The particles are located in their triangles by the mesh's bucket grid every step, and the scatter runs
 // over the mesh's colours (no two triangles of a colour share a node): lock-free and, for any thread count,
 // bitwise the same. The run's interface is Simulation<2>'s (run.cpp drives either).
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "engine/consistent_mass.hpp"
 #include "engine/material.hpp"
+#include "engine/mesh_mass_matrix.hpp"
 #include "engine/particle_measures.hpp"
 #include "engine/particle_store.hpp"
 #include "engine/powell_sabin.hpp"
@@ -57,11 +60,13 @@ class MeshSimulation {
   bool has_exact() const { return problem_->has_exact(); }
   RunErrors errors() const { return particle_errors(store_, *problem_, time_); }
   Energy energy() const { return particle_energy(store_, material_); }
-  /// The critical step h/(c + |v|) with h the mesh's smallest altitude.
-  CriticalStep critical_step() const { return critical_step_of(store_, material_, mesh().min_height(), 1.0); }
+  /// The critical step κ h/(c + |v|) with h the mesh's smallest altitude, κ < 1 with the consistent mass.
+  CriticalStep critical_step() const;
   double external_power() const;
   /// TLS fits that fell back to neighbour particles, a lower degree or a constant.
   FallbackCounts fallbacks() const { return fallbacks_; }
+  /// CG iterations of the consistent-mass solves in the last step (0 for the lumped mass).
+  int last_cg_iterations() const { return cg_iterations_; }
 
   SimulationState save_state() const { return save_particle_state(store_, step_, time_, conservation_); }
   void load_state(const SimulationState& state);
@@ -84,6 +89,9 @@ class MeshSimulation {
   std::vector<std::string> pipeline_;
   Conservation conservation_;
   FallbackCounts fallbacks_;
+  std::optional<MeshMassMatrix> mass_matrix_;            ///< projection and consistent mass only
+  std::optional<ConsistentMassSolver<2>> mass_solver_;  ///< its CG
+  int cg_iterations_ = 0;
   double particle_mass_ = 0.0, empty_mass_ = 0.0;
   double dt_ = 0.0, time_ = 0.0;
   long step_ = 0, steps_total_ = 0;

@@ -582,14 +582,15 @@ void check_moving_basis(const Node& alg, const Scene& s) {
                                          name_of(a.mapping, kMapping) + "\"");
 }
 
-/// On a triangle mesh: USL or MUSL with the lumped mass (thesis §3.4.4, §6.3.1); the TLS reconstruction with the
-/// P1 basis (thesis §6.1.2), direct mapping with either basis.
+/// On a triangle mesh: USL or MUSL (thesis §3.4.4, §6.3.1); the TLS reconstruction with the P1 basis and the lumped
+/// mass (thesis §6.1.2), direct mapping with either basis and any mass.
 void check_mesh_algorithm(const Node& alg, const Scene& s) {
   const AlgorithmSpec& a = s.algorithm;
   if (a.update != Update::usl && a.update != Update::musl)
     fail("algorithm.update", *alg.find("update"), "on a triangle mesh (grid.mesh) expected \"usl\" or \"musl\"");
-  if (a.mass != MassMatrix::lumped)
-    fail("algorithm.mass", *alg.find("mass"), "on a triangle mesh (grid.mesh) expected \"lumped\"");
+  if (a.mass != MassMatrix::lumped && a.mapping != Mapping::direct)
+    fail("algorithm.mass", *alg.find("mass"), "the consistent mass on a triangle mesh takes the particles as carriers: "
+                                              "expected algorithm.mapping = \"direct\", or algorithm.mass = \"lumped\"");
   if (a.mapping != Mapping::direct && a.mapping != Mapping::tls)
     fail("algorithm.mapping", *alg.find("mapping"), "on a triangle mesh (grid.mesh) expected \"direct\" or \"tls\"");
   if (a.mapping == Mapping::tls && s.grid.basis != Basis::linear)
