@@ -89,6 +89,9 @@ study traction-4-9-unified tools/scenes/bar-traction.json --set algorithm.mass=c
 study bar-traction-unified tools/scenes/bar-traction.json --set algorithm.mass=consistent --vary algorithm.update=unified \
   --vary 'grid.cells=[20],[40],[80],[160]' --vary material.model=neo-hookean,linear-elastic
 
+# thesis §6.3.1 Table 6.1 and §3.4.4: the plate on triangle meshes, MPM-P1, MPM-TLS and PS-MPM
+bash tools/triangle_study.sh "$MPM" > "$OUT/triangles.md"
+
 # thesis Figs 4.6 and 4.8: stress profiles of the chapter-4 methods on the two bars
 /usr/bin/python3 tools/plot_profiles.py --mpm "$MPM" --out "$OUT"
 /usr/bin/python3 tools/results_md.py --results "$OUT" --out docs/RESULTS.md --seconds $(( $(date +%s) - start ))
