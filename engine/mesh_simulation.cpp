@@ -177,7 +177,7 @@ void MeshSimulation::locate_particles() {
   const auto x = store_.column(Field::position, 0), y = store_.column(Field::position, 1);
   const std::size_t n = store_.size();
   parallel_over(n, particle_grain, [&](std::size_t b, std::size_t e) {
-    for (std::size_t p = b; p < e; ++p) element_[p] = mesh().locate({x[p], y[p]});
+    for (std::size_t p = b; p < e; ++p) element_[p] = mesh().locate({x[p], y[p]}, element_[p]);
   });
   const auto lost = std::find(element_.begin(), element_.end(), -1);
   if (lost != element_.end())

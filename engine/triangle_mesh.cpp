@@ -147,6 +147,15 @@ int TriangleMesh::locate(const Point2& x) const {
   return -1;
 }
 
+int TriangleMesh::locate(const Point2& x, int hint) const {
+  if (hint >= 0) {
+    constexpr double well_inside = 1e-12;  // far beyond locate's edge tolerance of 1e-14
+    const auto l = barycentric(hint, x);
+    if (l[0] > well_inside && l[1] > well_inside && l[2] > well_inside) return hint;
+  }
+  return locate(x);
+}
+
 TriangleMesh make_jittered_mesh(Point2 box, int nx, int ny, double jitter, unsigned seed) {
   std::mt19937_64 rng(seed);
   std::uniform_real_distribution<double> shift(-jitter, jitter);

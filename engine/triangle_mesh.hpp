@@ -38,6 +38,10 @@ class TriangleMesh {
 
   /// The triangle that contains x (on an edge: the lowest-numbered of the triangles that share it), or −1.
   int locate(const Point2& x) const;
+  /// As locate(x), first trying triangle `hint` (a particle's triangle at the last step: it rarely moves on). The
+  /// hint is taken only for a point well inside it, where no other triangle contains the point, so the answer is
+  /// locate(x)'s whatever the hint.
+  int locate(const Point2& x, int hint) const;
   /// Barycentric coordinates of x in triangle e (λ_k belongs to vertex k; they sum to 1).
   std::array<double, 3> barycentric(std::size_t e, const Point2& x) const;
 

@@ -65,6 +65,7 @@ TEST_CASE("P1 basis on an unstructured mesh - partition of unity and linear repr
     const Point2 x{ux(rng), uy(rng)};
     const int e = mesh.locate(x);
     REQUIRE(e >= 0);
+    REQUIRE(mesh.locate(x, k % static_cast<int>(mesh.triangle_count())) == e);  // any hint: the same answer
     basis.evaluate(e, x, idx, w, g);
     double sum = 0, gsum[2] = {0, 0};
     Point2 rx{0, 0};
