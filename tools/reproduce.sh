@@ -91,6 +91,7 @@ study bar-traction-unified tools/scenes/bar-traction.json --set algorithm.mass=c
 
 # thesis §6.3.1 Table 6.1 and §3.4.4: the plate on triangle meshes, MPM-P1, MPM-TLS and PS-MPM
 bash tools/triangle_study.sh "$MPM" > "$OUT/triangles.md"
+/usr/bin/python3 tools/plot_triangles.py --mpm "$MPM" --out "$OUT"
 
 # thesis Figs 4.6 and 4.8: stress profiles of the chapter-4 methods on the two bars
 /usr/bin/python3 tools/plot_profiles.py --mpm "$MPM" --out "$OUT"

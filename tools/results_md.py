@@ -540,7 +540,7 @@ bar runs take about a millisecond — medians of 5 repeats — so their ranking 
 """
     triangles = os.path.join(a.results, "triangles.md")
     if os.path.exists(triangles):
-        md += TRIANGLES.format(tables=open(triangles).read().strip())
+        md += TRIANGLES.format(tables=open(triangles).read().strip(), rel=rel)
     with open(a.out, "w") as f:
         f.write(md)
 
@@ -562,6 +562,14 @@ the unstructured mesh here has 1056. Every run conserves mass and momentum to ro
   lowest PS errors on the coarse mesh, but σ does not converge over these meshes (open). With one particle per split
   triangle the particle-carried consistent mass is near-singular at the boundary and the run stops with J ≤ 0; with
   the consistent mass the critical step is 0.408 h/c (P1's factor), below the thesis' dt on the 1056-triangle mesh.
+
+The profiles (`/usr/bin/python3 tools/plot_triangles.py`): MPM-TLS on the exact curve where MPM-P1 scatters
+(Fig 6.8), and on the coarse 162-triangle mesh at the thesis' dt = 2.25e-4 (which exceeds h/c on the 1056-triangle
+mesh) PS-MPM with the consistent mass for the velocities on the exact curve as in Fig 3.9, the lumped PS-MPM off it
+with outliers at the boundary:
+
+![Fig 6.8]({rel}/triangles_6_8.png)
+![Fig 3.9]({rel}/triangles_3_9.png)
 
 Measured by `bash tools/triangle_study.sh` (one run each; throughput on two threads of a shared machine; the step
 throughput of P1 on triangles beside the grid is in the README's benchmark table, `bench_mesh`):
