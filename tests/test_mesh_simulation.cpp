@@ -241,6 +241,15 @@ TEST_CASE("plate on triangles - MPM-TLS's and PS-MPM's stress converge where MPM
   CHECK(order("linear", "direct") <= 0.5);
 }
 
+TEST_CASE("a particle that leaves the mesh stops the run naming it", "[mesh-sim]") {
+  nlohmann::json scene = plate_on_mesh("plate_h1.msh", "linear", "direct", "usl", 6, 1e-4, 0.05);
+  scene.erase("problem");
+  scene["bodies"] = {{{"box", {{0.2, 0.2}, {0.8, 0.8}}}, {"velocity", {40.0, 0.0}}}};
+  scene["fixed"] = nlohmann::json::array();
+  MeshSimulation sim(parse_scene(scene));
+  CHECK_THROWS_WITH(run_to_end(sim), Contains("locate: particle") && Contains("left the mesh"));
+}
+
 TEST_CASE("scenes a triangle mesh refuses - exit 2 naming the key", "[mesh-sim]") {
   const auto base = plate_on_mesh("plate_h1.msh", "linear", "direct", "musl", 6, 1e-4, 2e-3);
   const auto refused = [&](auto edit, const std::string& words) {

@@ -74,6 +74,15 @@ expect 2 "^--set material.E: nested deeper than" -- "$mpm" validate "$scenes/pla
 sed 's/"E": 1.0e7/"E": 1e400/' "$scenes/plate.json" > huge.json
 expect 2 "huge.json: material.E: .*1e400" -- "$mpm" validate huge.json
 expect 2 "^--set material.E = 1e400: expected a finite number" -- "$mpm" validate "$scenes/plate.json" --set material.E=1e400
+# a triangle mesh: a bad mesh is refused naming the file and the element; a mesh path is relative to the scene
+meshes=$(cd "$scenes/../../tests/meshes" && pwd)
+expect 2 "bad_quad.msh: line [0-9]+: element 17 is a 4-node quadrangle" -- "$mpm" validate \
+  "$scenes/plate-triangles.json" --set grid.mesh="\"$meshes/bad_quad.msh\""
+expect 2 "bad_inverted.msh: .*element" -- "$mpm" run "$scenes/plate-triangles.json" \
+  --set grid.mesh="\"$meshes/bad_inverted.msh\"" --quiet
+expect 2 "nope.msh: cannot open" -- "$mpm" validate "$scenes/plate-triangles.json" --set grid.mesh=nope.msh
+expect 2 "grid.cells = \[8,8\]: expected either grid.cells or grid.mesh" -- "$mpm" validate \
+  "$scenes/plate-triangles.json" --set 'grid.cells=[8,8]'
 mkdir adir
 expect 2 "cannot read adir: is a directory" -- "$mpm" run adir --quiet
 expect 2 "cannot read adir: is a directory" -- "$mpm" validate adir
