@@ -1,8 +1,10 @@
 #include "engine/mesh_simulation.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <random>
+#include <type_traits>
 
 #include <tbb/enumerable_thread_specific.h>
 
@@ -253,26 +255,31 @@ class MeshSimulation::Step {
     }
   }
 
-  /// P2G over the mesh's colours: the triangles of one colour share no function, so each task adds its
-  /// triangles' particles to the grid without locks, and every sum is formed in the same order on any thread count.
-  void scatter(bool mass, bool momentum, bool force) {
+  /// g(triangle) for every triangle, colour by colour: the triangles of one colour share no function, so g may add
+  /// to their functions' entries without locks, and every sum is formed in the same order on any thread count.
+  template <class G>
+  void for_each_triangle_coloured(G&& g) const {
     const TriangleMesh& mesh = sim_.mesh();
-    const bool tls = sim_.scene_.algorithm.mapping == Mapping::tls;
-    tbb::enumerable_thread_specific<FallbackCounts> counts;
     for (int c = 0; c < mesh.colours(); ++c) {
       const int first = mesh.colour_start(c), last = mesh.colour_start(c + 1);
       parallel_over(last - first, element_grain, [&](std::size_t b, std::size_t e) {
-        for (std::size_t k = first + b; k < first + e; ++k) {
-          const int element = mesh.elements_by_colour()[k];
-          if (tls) {
-            if constexpr (std::is_same_v<B, TriangleP1>) scatter_tls(element, mass, momentum, force, counts.local());
-          } else {
-            scatter_direct(element, mass, momentum, force);
-          }
-          if (tls && force && F::active) scatter_direct(element, false, false, true, false);
-        }
+        for (std::size_t k = first + b; k < first + e; ++k) g(mesh.elements_by_colour()[k]);
       });
     }
+  }
+
+  /// P2G, triangle by triangle over the colouring.
+  void scatter(bool mass, bool momentum, bool force) {
+    const bool tls = sim_.scene_.algorithm.mapping == Mapping::tls;
+    tbb::enumerable_thread_specific<FallbackCounts> counts;
+    for_each_triangle_coloured([&](int element) {
+      if (tls) {
+        if constexpr (std::is_same_v<B, TriangleP1>) scatter_tls(element, mass, momentum, force, counts.local());
+        if (force && F::active) scatter_direct(element, false, false, true, false);
+      } else {
+        scatter_direct(element, mass, momentum, force);
+      }
+    });
     if (mass || force)  // each fit is counted once per step, at the step's first scatter
       for (const auto& c : counts) {
         sim_.fallbacks_.neighbour += c.neighbour;
@@ -339,13 +346,7 @@ class MeshSimulation::Step {
     if (own.empty()) return;
     for (int k = 0; k < 3; ++k)
       if (const int f = mesh.neighbour(element, k); f >= 0) for_particles_of(f, [&](std::size_t p) { near.push_back(sample(p)); });
-    FallbackCounts local;
-    const TriangleFields fit = fit_triangle(own, near, totals, mesh.area(element), sim_.scene_.algorithm.tls_degree, local);
-    if (mass || force) {
-      counts.neighbour += local.neighbour;
-      counts.degree += local.degree;
-      counts.constant += local.constant;
-    }
+    const TriangleFields fit = fit_triangle(own, near, totals, mesh.area(element), sim_.scene_.algorithm.tls_degree, counts);
     MeshGrid& g = sim_.grid_;
     std::array<int, K> idx;
     std::array<double, K> w;
@@ -389,22 +390,15 @@ class MeshSimulation::Step {
     MeshMassMatrix& mass = *sim_.mass_matrix_;
     if (!mass_assembled_) {
       mass.clear();
-      const TriangleMesh& mesh = sim_.mesh();
-      for (int c = 0; c < mesh.colours(); ++c) {
-        const int first = mesh.colour_start(c), last = mesh.colour_start(c + 1);
-        parallel_over(last - first, element_grain, [&](std::size_t b, std::size_t e) {
-          std::array<int, K> idx;
-          std::array<double, K> w;
-          std::array<Point2, K> grad;
-          for (std::size_t k = first + b; k < first + e; ++k) {
-            const int element = mesh.elements_by_colour()[k];
-            for_particles_of(element, [&](std::size_t p) {
-              basis_.evaluate(element, {pv_.x[0][p], pv_.x[1][p]}, idx, w, grad);
-              mass.add(element, w, pv_.m[p]);
-            });
-          }
+      for_each_triangle_coloured([&](int element) {
+        std::array<int, K> idx;
+        std::array<double, K> w;
+        std::array<Point2, K> grad;
+        for_particles_of(element, [&](std::size_t p) {
+          basis_.evaluate(element, {pv_.x[0][p], pv_.x[1][p]}, idx, w, grad);
+          mass.add(element, w, pv_.m[p]);
         });
-      }
+      });
       mass_assembled_ = true;
     }
     sim_.cg_iterations_ += sim_.mass_solver_->solve_with(

@@ -91,6 +91,12 @@ study bar-traction-unified tools/scenes/bar-traction.json --set algorithm.mass=c
 
 # thesis §6.3.1 Table 6.1 and §3.4.4: the plate on triangle meshes, MPM-P1, MPM-TLS and PS-MPM
 bash tools/triangle_study.sh "$MPM" > "$OUT/triangles.md"
+TRI_MESHES='grid.mesh="tools/meshes/plate_h1.msh","tools/meshes/plate_h2.msh","tools/meshes/plate_h3.msh"'
+study triangles-p1 tools/scenes/plate-triangles.json --set algorithm.update=usl --set time.dt=2.5e-5 \
+  --set time.end=0.02 --vary "$TRI_MESHES" --vary algorithm.mapping=direct,tls
+study triangles-ps tools/scenes/plate-triangles.json --set algorithm.update=usl --set time.dt=2.5e-5 \
+  --set time.end=0.02 --set grid.basis=powell-sabin --set algorithm.mapping=direct --vary "$TRI_MESHES" \
+  --vary algorithm.mass=lumped,projection,consistent
 /usr/bin/python3 tools/plot_triangles.py --mpm "$MPM" --out "$OUT"
 
 # thesis Figs 4.6 and 4.8: stress profiles of the chapter-4 methods on the two bars

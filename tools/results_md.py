@@ -15,8 +15,10 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-BASIS_NAME = {"linear": "MPM", "ddmpm": "DDMPM", "maxent": "MPM-maxent", "bspline2": "BSMPM", "bspline3": "BSMPM-3"}
+BASIS_NAME = {"linear": "MPM", "ddmpm": "DDMPM", "maxent": "MPM-maxent", "bspline2": "BSMPM", "bspline3": "BSMPM-3",
+              "powell-sabin": "PS-MPM"}
 MAPPING_SUFFIX = {"direct": "", "mls": "-MLS", "tls": "-TLS", "cubic-spline": "-CS"}
+TRIANGLE_PARTICLES = 24  # particles per triangle of the triangle-mesh studies (tools/scenes/plate-triangles.json)
 FIELDS = [("displacement_rms", "u"), ("velocity_rms", "v"), ("stress_rms", "σ")]
 # a basis carried by the body (algorithm.update): OTM with its basis, the unified approach (B-splines)
 MOVING_NAME = {("otm", "linear"): "OTM-P1", ("otm", "maxent"): "OTM-maxent", ("unified", "bspline2"): "unified"}
@@ -64,7 +66,12 @@ def read_study(results, name, basis="bspline2"):
             r["mapping"] = r.get("algorithm.mapping") or mapping_set(command)
             r["method"] = MOVING_NAME.get((r.get("algorithm.update"), b)) or (
                 BASIS_NAME.get(b, b) + MAPPING_SUFFIX.get(r["mapping"], r["mapping"]))
-            r["cells"] = int(r["grid.cells"].strip("[]").split(",")[0])
+            if "grid.mesh" in r:  # a triangle mesh: its triangles (24 particles each in these studies), the mass
+                r["cells"] = int(r["particles"]) // TRIANGLE_PARTICLES
+                r["h"] = 1 / math.sqrt(r["cells"])  # the element size, up to a factor, for the fitted orders
+                r["method"] += "" if r["mapping"] == "tls" else f" ({r.get('algorithm.mass') or 'lumped'})"
+            else:
+                r["cells"] = int(r["grid.cells"].strip("[]").split(",")[0])
             for k, v in list(r.items()):
                 if k.endswith(("_rms", "_l2", "_max", "wall_s", "fallbacks")):
                     r[k] = number(v)
@@ -105,7 +112,7 @@ def convergence_table(groups, length):
              "|---|---|---|---|---|---|---|---|---|---|---|"]
     for method, rs in groups.items():
         good = [r for r in rs if ok(r)]
-        hs = [length / r["cells"] for r in good]
+        hs = [r.get("h") or length / r["cells"] for r in good]
         orders = [slope(hs, [r[f] for r in good]) for f, _ in FIELDS]
         for i, r in enumerate(rs):
             o = ["%.2f" % x if i == 0 and math.isfinite(x) else "" for x in orders]
@@ -304,8 +311,15 @@ def main():
     rel_l2_figure([("large-deformation bar, Table 5.4", large, 1.0), ("column compaction, Table 5.6", column, 50.0)],
                   os.path.join(R, "relative_l2.png"))
     otm_groups = by_method(otm_bar)
-    front_figure([("plate, A = 0.1 (8–64 cells)", plate_groups), ("bar, Table 5.2 (5–40 cells)", bar_groups),
-                  ("bar of thesis §4.6.1 (8–511 cells)", otm_groups)], os.path.join(R, "fronts.png"))
+    tri_names = ("triangles-p1", "triangles-ps")
+    tri = [r for n in tri_names if os.path.isdir(os.path.join(R, n)) for r in read_study(R, n)[0]]
+    tri_cmds = [read_study(R, n)[1] for n in tri_names if os.path.isdir(os.path.join(R, n))]
+    tri_groups = by_method(tri)
+    fronts = [("plate, A = 0.1 (8–64 cells)", plate_groups), ("bar, Table 5.2 (5–40 cells)", bar_groups),
+              ("bar of thesis §4.6.1 (8–511 cells)", otm_groups)]
+    if tri_groups:
+        fronts.append(("plate of §6.3.1 on 246–3708 triangles", tri_groups))
+    front_figure(fronts, os.path.join(R, "fronts.png"))
     convergence_figure(otm_groups, 1.0, os.path.join(R, "bar_otm_convergence.png"),
                        "fixed-ends bar of thesis §4.6.1, T = 1e-3 s, 12 particles per cell (thesis Fig 4.7)")
     tr_groups = {f"{m} ({mat})": rs
@@ -535,12 +549,15 @@ the exact curve — as in the thesis. The stress RMS over all particles:
 
 {advice("Bar of thesis §4.6.1 (every chapter-4 method)", otm_groups)}
 
+{advice("Plate on triangles (the 'cells' are triangles)", tri_groups) if tri_groups else ""}
+
 (Commands: sections 1, 2 and 6; the dashed line is the front of runs no other run beats in both time and error. The
 bar runs take about a millisecond — medians of 5 repeats — so their ranking in time is near the timer's noise.)
 """
     triangles = os.path.join(a.results, "triangles.md")
     if os.path.exists(triangles):
-        md += TRIANGLES.format(tables=open(triangles).read().strip(), rel=rel)
+        md += TRIANGLES.format(tables=open(triangles).read().strip(), rel=rel,
+                               convergence=convergence_table(tri_groups, 1.0), commands=cmds(tri_cmds))
     with open(a.out, "w") as f:
         f.write(md)
 
@@ -571,10 +588,19 @@ with outliers at the boundary:
 ![Fig 6.8]({rel}/triangles_6_8.png)
 ![Fig 3.9]({rel}/triangles_3_9.png)
 
-Measured by `bash tools/triangle_study.sh` (one run each; throughput on two threads of a shared machine; the step
-throughput of P1 on triangles beside the grid is in the README's benchmark table, `bench_mesh`):
+The 1056-triangle plate, measured by `bash tools/triangle_study.sh` (one run each; throughput on two threads of a
+shared machine; the step throughput of P1 on triangles beside the grid is in the README's benchmark table,
+`bench_mesh`):
 
 {tables}
+
+Convergence on `tools/meshes/plate_h1..3.msh` (246, 946, 3708 triangles: "cells" are triangles, the orders are in
+the element size h ∝ 1/√triangles), 24 particles per triangle, dt = 2.5e-5, T = 0.02, USL; these runs are in the
+error-against-run-time fronts of section 8:
+
+{convergence}
+
+{commands}
 """
 
 if __name__ == "__main__":

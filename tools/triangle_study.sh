@@ -1,9 +1,8 @@
 #!/usr/bin/env bash
-# The plate on triangle meshes (thesis §6.3.1 Table 6.1, §3.4.4): MPM-P1, MPM-TLS and PS-MPM on the 1056-triangle
-# mesh with 24 particles per triangle (dt = 1.25e-4, T = 0.015), and each method on the convergence family
-# tools/meshes/plate_h{1,2,3}.msh (24 particles per triangle, dt = 2.5e-5, T = 0.02). PS-MPM runs with the lumped
-# mass and with the consistent one for the velocities (projection) or everywhere. Prints markdown tables of the
-# errors, conservation and throughput from each run's summary.
+# The plate on triangle meshes (thesis §6.3.1 Table 6.1): MPM-P1, MPM-TLS and PS-MPM on the 1056-triangle mesh with
+# 24 particles per triangle (dt = 1.25e-4, T = 0.015); PS-MPM with the lumped mass and with the consistent one for
+# the velocities (projection) or everywhere. Prints a markdown table of the errors, conservation and throughput
+# from each run's summary. (The convergence over tools/meshes/plate_h{1,2,3}.msh: `mpm study`, tools/reproduce.sh.)
 # Usage: tools/triangle_study.sh [MPM]   (default build/tools/mpm)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -46,14 +45,4 @@ for m in "${methods[@]}"; do
   IFS=: read -r label basis mapping mass <<<"$m"
   run "t61-$label" --set grid.basis="$basis" --set algorithm.mapping="$mapping" --set algorithm.mass="$mass"
   row "t61-$label" "$label"
-done
-header "Convergence on tools/meshes/plate_h{1,2,3}.msh (246, 946, 3708 triangles), 24 per triangle, dt = 2.5e-5, T = 0.02, USL"
-for m in "${methods[@]}"; do
-  IFS=: read -r label basis mapping mass <<<"$m"
-  for h in 1 2 3; do
-    run "conv-$label-$h" --set grid.mesh="\"$root/tools/meshes/plate_h$h.msh\"" --set grid.basis="$basis" \
-      --set algorithm.mapping="$mapping" --set algorithm.mass="$mass" --set algorithm.update=usl \
-      --set time.dt=2.5e-5 --set time.end=0.02
-    row "conv-$label-$h" "$label, h$h"
-  done
 done
