@@ -43,7 +43,8 @@ std::vector<std::array<double, 2>> uniform_points_in_triangle(int n) {
     else pieces.insert(pieces.end(), {{c, a, mid}, {c, mid, b}});
   }
   std::vector<P> out;
-  for (const auto& [p0, p1, p2] : pieces) {
+  for (const auto& piece : pieces) {
+    const P &p0 = piece[0], &p1 = piece[1], &p2 = piece[2];
     const auto at = [&](double u, double w) {
       return P{p0[0] + u * (p1[0] - p0[0]) + w * (p2[0] - p0[0]), p0[1] + u * (p1[1] - p0[1]) + w * (p2[1] - p0[1])};
     };
