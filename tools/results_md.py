@@ -311,8 +311,8 @@ def main():
     rel_l2_figure([("large-deformation bar, Table 5.4", large, 1.0), ("column compaction, Table 5.6", column, 50.0)],
                   os.path.join(R, "relative_l2.png"))
     otm_groups = by_method(otm_bar)
-    tri_names = ("triangles-p1", "triangles-ps")
-    tri = [r for n in tri_names if os.path.isdir(os.path.join(R, n)) for r in read_study(R, n)[0]]
+    tri_names = {"triangles-p1": "linear", "triangles-ps": "powell-sabin"}  # the basis each study's scene sets
+    tri = [r for n, b in tri_names.items() if os.path.isdir(os.path.join(R, n)) for r in read_study(R, n, b)[0]]
     tri_cmds = [read_study(R, n)[1] for n in tri_names if os.path.isdir(os.path.join(R, n))]
     tri_groups = by_method(tri)
     fronts = [("plate, A = 0.1 (8–64 cells)", plate_groups), ("bar, Table 5.2 (5–40 cells)", bar_groups),
