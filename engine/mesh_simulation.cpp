@@ -44,10 +44,7 @@ std::vector<std::array<double, 2>> uniform_points_in_triangle(int n) {
   }
   std::vector<P> out;
   for (const auto& piece : pieces) {
-    const P &p0 = piece[0], &p1 = piece[1], &p2 = piece[2];
-    const auto at = [&](double u, double w) {
-      return P{p0[0] + u * (p1[0] - p0[0]) + w * (p2[0] - p0[0]), p0[1] + u * (p1[1] - p0[1]) + w * (p2[1] - p0[1])};
-    };
+    const auto at = [&](double u, double w) { return point_at(piece[0], piece[1], piece[2], u, w); };
     for (int j = 0; j < k; ++j)
       for (int i = 0; i + j < k; ++i) {
         out.push_back(at((i + 1.0 / 3) / k, (j + 1.0 / 3) / k));                      // upward sub-triangle
@@ -96,8 +93,7 @@ Seeds<2> seed_triangles(const Scene& scene, const TriangleMesh& mesh, const B& b
         } else {
           r = pattern[k];
         }
-        const std::array<double, 2> x{a[0] + r[0] * (b[0] - a[0]) + r[1] * (c[0] - a[0]),
-                                      a[1] + r[0] * (b[1] - a[1]) + r[1] * (c[1] - a[1])};
+        const Point2 x = point_at(a, b, c, r[0], r[1]);
         for (const auto& body : bodies)
           if (x[0] >= body.lo[0] && x[0] < body.hi[0] && x[1] >= body.lo[1] && x[1] < body.hi[1]) {
             s.x.push_back(x);
@@ -354,10 +350,9 @@ class MeshSimulation::Step {
     std::array<Point2, K> grad;
     const double area = mesh.area(element);
     for (int q = 0; q < TriangleGauss::points; ++q) {
-      const auto& xi = TriangleGauss::xi[q];
       const auto& t = mesh.triangle(element);
-      const Point2 &a = mesh.nodes()[t[0]], &b = mesh.nodes()[t[1]], &c = mesh.nodes()[t[2]];
-      const Point2 x{a[0] + xi[0] * (b[0] - a[0]) + xi[1] * (c[0] - a[0]), a[1] + xi[0] * (b[1] - a[1]) + xi[1] * (c[1] - a[1])};
+      const Point2 x = point_at(mesh.nodes()[t[0]], mesh.nodes()[t[1]], mesh.nodes()[t[2]], TriangleGauss::xi[q][0],
+                                TriangleGauss::xi[q][1]);
       basis_.evaluate(element, x, idx, w, grad);
       const double wq = TriangleGauss::w[q] * area;
       const auto& f = fit.at;

@@ -11,6 +11,12 @@ namespace mpm {
 
 using Point2 = std::array<double, 2>;
 
+/// The point at reference coordinates (s, t) of the triangle (a, b, c): a + s (b − a) + t (c − a) (thesis eq. 6.14
+/// inverted).
+inline Point2 point_at(const Point2& a, const Point2& b, const Point2& c, double s, double t) {
+  return {a[0] + s * (b[0] - a[0]) + t * (c[0] - a[0]), a[1] + s * (b[1] - a[1]) + t * (c[1] - a[1])};
+}
+
 class TriangleMesh {
  public:
   /// Checks and builds a mesh of the box [0, box₀] × [0, box₁]; `origin` (a file name) heads every error message.
