@@ -56,9 +56,8 @@ std::vector<std::array<double, 2>> uniform_points_in_triangle(int n) {
 
 /// The parts of triangle e that particles fill uniformly: the triangle itself, or for Powell–Sabin splines the six
 /// sub-triangles of its split. The splines are quadratic on each sub-triangle only: particles spread over the whole
-/// triangle integrate the gradients of the spline with an error that grows as 1/h. Measured on the plate meshes
-/// (tools/meshes/plate_h1..3, constant stress, 4 particles per triangle), the interior force |f|/m was 17, 33, 71
-/// against 1e-14 for P1; with the particles of each sub-triangle at its sub-centroids it is exact at the start.
+/// triangle integrate the gradients of the spline with an error that grows as 1/h (the interior force of a constant
+/// stress does not vanish); with the particles of each sub-triangle at its sub-centroids it is exact at the start.
 template <class B>
 std::vector<std::array<Point2, 3>> parts_of(const B& basis, const TriangleMesh& mesh, std::size_t e) {
   if constexpr (std::is_same_v<B, PowellSabinBasis>) {
