@@ -16,6 +16,7 @@
 #include "engine/scene.hpp"
 #include "engine/tls_rebuild.hpp"
 #include "kernels/gauss_scatter.hpp"
+#include "kernels/isa.hpp"
 #include "kernels/transfer.hpp"
 
 namespace mpm {
@@ -72,15 +73,18 @@ class GaussPoints {
       const bool two_by_two = table.n[0] == 2 && table.n[1] == 2;  // the default rule, unrolled
       const unsigned* cells = store_.cell_of_slot.data();
       bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
-        if (two_by_two)
-          scatter_gauss_cells<Fields, Body, S, 2>(table, basis.axis[0], basis.axis[1], gp, g, cells, b, e);
-        else
-          scatter_gauss_cells<Fields, Body, S>(table, basis.axis[0], basis.axis[1], gp, g, cells, b, e);
+        with_active_isa([&] {
+          if (two_by_two)
+            scatter_gauss_cells<Fields, Body, S, 2>(table, basis.axis[0], basis.axis[1], gp, g, cells, b, e);
+          else
+            scatter_gauss_cells<Fields, Body, S>(table, basis.axis[0], basis.axis[1], gp, g, cells, b, e);
+        });
       });
     } else {
       const unsigned* order = bins.order().data();
-      bins.for_each_block_coloured(
-          [&](std::size_t b, std::size_t e) { scatter_gauss<Fields, Body, Dim, S>(basis, gp, g, order, b, e); });
+      bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
+        with_active_isa([&] { scatter_gauss<Fields, Body, Dim, S>(basis, gp, g, order, b, e); });
+      });
     }
   }
 

@@ -21,6 +21,7 @@
 #include "engine/mesh_simulation.hpp"
 #include "engine/output_h5.hpp"
 #include "engine/simulation.hpp"
+#include "kernels/isa.hpp"
 
 namespace mpm {
 
@@ -335,6 +336,7 @@ class Run {
     j["dt"] = sim_.dt();
     j["particles"] = sim_.particles().size();
     j["threads"] = threads_;
+    j["isa"] = isa_name(active_isa());
     j["wall_s"] = stepping_s_;
     j["particle_steps_per_s"] =
         stepping_s_ > 0 ? static_cast<double>(sim_.particles().size()) * steps_timed_ / stepping_s_ : 0.0;

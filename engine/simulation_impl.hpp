@@ -18,6 +18,7 @@
 #include "engine/deterministic_sum.hpp"
 #include "engine/parallel_over.hpp"
 #include "engine/point_load.hpp"
+#include "kernels/isa.hpp"
 #include "kernels/quadrature.hpp"
 #include "kernels/transfer.hpp"
 
@@ -459,7 +460,9 @@ class Simulation<Dim>::Step {
     } else {
       const unsigned* order = sim_.bins_.order().data();
       sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-        sim_.block_momentum_[block] = advance_velocity_scatter_momentum<Dim, S>(basis_, pv_, gv_, order, b, e, dt_);
+        with_active_isa([&] {
+          sim_.block_momentum_[block] = advance_velocity_scatter_momentum<Dim, S>(basis_, pv_, gv_, order, b, e, dt_);
+        });
       });
       sim_.check_momentum(sum_totals(sim_.block_momentum_));
     }
@@ -497,8 +500,10 @@ class Simulation<Dim>::Step {
     } else {
       const unsigned* order = sim_.bins_.order().data();
       sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-        const auto totals = scatter_p2g<Fields, Dim, S>(basis_, pv_, gv_, order, b, e, body_);
-        if constexpr (Fields.momentum) sim_.block_momentum_[block] = totals;
+        with_active_isa([&] {
+          const auto totals = scatter_p2g<Fields, Dim, S>(basis_, pv_, gv_, order, b, e, body_);
+          if constexpr (Fields.momentum) sim_.block_momentum_[block] = totals;
+        });
       });
       if constexpr (Fields.momentum) sim_.check_momentum(sum_totals(sim_.block_momentum_));
     }
@@ -512,7 +517,7 @@ class Simulation<Dim>::Step {
   void gather(const char* stage) {
     const auto stress = [&](const double* Fp, double* s) { material_.template stress<Dim>(Fp, s); };
     parallel_over(np_, particle_grain, [&](std::size_t b, std::size_t e) {
-      gather_g2p<Fields, Dim, S>(basis_, pv_, gv_, b, e, dt_, stress, guard_);
+      with_active_isa([&] { gather_g2p<Fields, Dim, S>(basis_, pv_, gv_, b, e, dt_, stress, guard_); });
     });
     const std::size_t bad = guard_.first_bad.load();
     if (bad != ParticleGuard::none) sim_.raise_unstable(bad, stage);

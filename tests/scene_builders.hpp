@@ -56,6 +56,31 @@ std::vector<std::vector<double>> state_after(const nlohmann::json& scene, int st
   return cols;
 }
 
+/// The largest difference between two runs' particle columns (state_after, in the order of `names`), relative to
+/// the magnitude of the column's field (F01 against the largest entry of F, not of F01 alone: where the exact shear
+/// is zero, a shear column holds round-off only, and relative to itself any two runs differ by O(1)).
+inline double largest_field_difference(const std::vector<std::vector<double>>& a,
+                                       const std::vector<std::vector<double>>& b,
+                                       const std::vector<std::string>& names) {
+  const auto field_of = [&](std::size_t c) { return names[c].substr(0, names[c].find_first_of("0123456789")); };
+  double worst = 0.0;
+  for (std::size_t c = 0; c < a.size(); ++c) {
+    double scale = 0.0;
+    for (std::size_t f = 0; f < a.size(); ++f)
+      if (field_of(f) == field_of(c))
+        for (double x : a[f]) scale = std::max(scale, std::abs(x));
+    for (std::size_t p = 0; p < a[c].size(); ++p)
+      worst = std::max(worst, std::abs(a[c][p] - b[c][p]) / std::max(scale, 1e-300));
+  }
+  return worst;
+}
+
+/// The particle column names of a scene's runs, in the order of state_after.
+template <int Dim>
+std::vector<std::string> column_names_of(const nlohmann::json& scene) {
+  return Simulation<Dim>(parse_scene(scene)).particles().column_names();
+}
+
 /// What a verification test reads from a bar run.
 struct BarResult {
   RunErrors errors;

@@ -3,6 +3,7 @@
 
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -16,6 +17,7 @@
 #include "engine/run.hpp"
 #include "engine/scene.hpp"
 #include "engine/study.hpp"
+#include "kernels/isa.hpp"
 
 namespace {
 
@@ -51,9 +53,10 @@ void write_json_atomically(const std::string& path, const nlohmann::json& j) {
 }
 
 void print_report(const nlohmann::json& s) {
-  std::printf("%s: %ld steps, %ld particles, %d threads, %.3f s stepping, %.3g particle-steps/s\n",
+  std::printf("%s: %ld steps, %ld particles, %d threads (%s), %.3f s stepping, %.3g particle-steps/s\n",
               s["status"].get<std::string>().c_str(), s["steps"].get<long>(), s["particles"].get<long>(),
-              s["threads"].get<int>(), s["wall_s"].get<double>(), s["particle_steps_per_s"].get<double>());
+              s["threads"].get<int>(), s["isa"].get<std::string>().c_str(), s["wall_s"].get<double>(),
+              s["particle_steps_per_s"].get<double>());
   if (s.contains("errors"))
     std::printf("errors (RMS): displacement %.6e  velocity %.6e  stress %.6e\n",
                 s["errors"]["displacement_rms"].get<double>(), s["errors"]["velocity_rms"].get<double>(),
@@ -109,6 +112,14 @@ int main(int argc, char** argv) {
     return mpm::exit_invalid;
   }
 
+  if (const char* isa = std::getenv("MPM_ISA")) {  // the kernels' instruction set (kernels/isa.hpp)
+    try {
+      mpm::set_active_isa(mpm::isa_for(isa));
+    } catch (const std::invalid_argument& e) {
+      std::fprintf(stderr, "mpm: %s\n", e.what());
+      return mpm::exit_invalid;
+    }
+  }
   if (study->parsed()) return mpm::study_command(study_args);
 
   try {

@@ -1,0 +1,111 @@
+#pragma once
+// The instruction set of the hot kernels, chosen when the program starts: the portable library (baseline x86-64,
+// SSE2) carries a second copy of each transfer kernel compiled for AVX2 + FMA and runs it on CPUs that have them,
+// so that users who link `mpm::engine` without building it for their machine (MPM_NATIVE) get its speed.
+//
+// `with_active_isa(f)` runs f inlined into a function compiled for the active instruction set: `flatten` inlines
+// everything f calls (the kernels are templates and always-inline helpers), and the GCC vector rows of
+// stencil.hpp are then lowered to 256-bit registers. The environment variable MPM_ISA=baseline forces the
+// portable code (to compare the two, or to reproduce a baseline CPU's round-off bit for bit); MPM_ISA=avx2 or
+// auto (the default) take the best the CPU supports. The copies differ in round-off only: the AVX2 code fuses
+// multiply-adds.
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <string_view>
+
+namespace mpm {
+
+enum class Isa {
+  baseline,  ///< the build's own instruction set (SSE2, or the machine's with MPM_NATIVE)
+  avx2_fma,  ///< x86-64 with AVX2 and FMA, in a portable build
+};
+
+/// Whether the build carries the AVX2 copy: an x86-64 build not already compiled for AVX2.
+#if defined(__x86_64__) && !defined(__AVX2__)
+inline constexpr bool isa_dispatch = true;
+#else
+inline constexpr bool isa_dispatch = false;
+#endif
+
+/// Whether this CPU runs the AVX2 copy.
+inline bool cpu_has_avx2_fma() {
+  if constexpr (isa_dispatch) {
+    __builtin_cpu_init();
+    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+  }
+  return false;
+}
+
+/// The instruction set for `request` (auto, baseline, avx2); throws std::invalid_argument naming MPM_ISA and the
+/// value when it is none of them or the CPU or build cannot run it.
+inline Isa isa_for(std::string_view request) {
+  if (request == "auto") return cpu_has_avx2_fma() ? Isa::avx2_fma : Isa::baseline;
+  if (request == "baseline") return Isa::baseline;
+  if (request == "avx2") {
+    if (cpu_has_avx2_fma()) return Isa::avx2_fma;
+    throw std::invalid_argument(isa_dispatch ? "MPM_ISA = avx2: this CPU lacks AVX2 or FMA"
+                                             : "MPM_ISA = avx2: this build has no separate AVX2 code (it is not a "
+                                               "portable x86-64 build)");
+  }
+  throw std::invalid_argument("MPM_ISA = '" + std::string(request) + "': expected auto, baseline or avx2");
+}
+
+/// The ISA the environment asks for; an invalid MPM_ISA falls back to auto here (the mpm program refuses it).
+inline Isa isa_from_environment() {
+  const char* request = std::getenv("MPM_ISA");
+  try {
+    return isa_for(request ? request : "auto");
+  } catch (const std::invalid_argument&) {
+    return isa_for("auto");
+  }
+}
+
+namespace detail {
+inline Isa active_isa = isa_from_environment();
+}
+
+/// The instruction set the kernels run with.
+inline Isa active_isa() { return detail::active_isa; }
+
+/// Selects the kernels' instruction set (not while a step runs); tests use it to run both copies in one process.
+inline void set_active_isa(Isa isa) {
+  if (isa == Isa::avx2_fma && !cpu_has_avx2_fma()) throw std::invalid_argument("set_active_isa: no AVX2 + FMA here");
+  detail::active_isa = isa;
+}
+
+/// The name the run summary reports as `isa`: avx2 (the AVX2 + FMA copy of a portable build), sse2 (its baseline
+/// x86-64 code), native (a build for the build machine's CPU, MPM_NATIVE), or baseline (another architecture).
+inline const char* isa_name(Isa isa) {
+  if (isa == Isa::avx2_fma) return "avx2";
+#if defined(__x86_64__) && !defined(__AVX2__) && !defined(__AVX__) && !defined(__SSE4_1__)
+  return "sse2";
+#elif defined(__x86_64__)
+  return "native";
+#else
+  return "baseline";
+#endif
+}
+
+#if defined(__x86_64__) && !defined(__AVX2__)
+namespace detail {
+template <class F>
+[[gnu::target("avx2,fma"), gnu::flatten]] void run_avx2_fma(F& f) {
+  f();
+}
+}  // namespace detail
+#endif
+
+/// Runs f() compiled for the active instruction set.
+template <class F>
+[[gnu::always_inline]] inline void with_active_isa(F&& f) {
+#if defined(__x86_64__) && !defined(__AVX2__)
+  if (detail::active_isa == Isa::avx2_fma) {
+    detail::run_avx2_fma(f);
+    return;
+  }
+#endif
+  f();
+}
+
+}  // namespace mpm
