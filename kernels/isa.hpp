@@ -1,14 +1,15 @@
 #pragma once
 // The instruction set of the hot kernels, chosen when the program starts: the portable library (baseline x86-64,
 // SSE2) carries a second copy of each transfer kernel compiled for AVX2 + FMA and runs it on CPUs that have them,
-// so that users who link `mpm::engine` without building it for their machine (MPM_NATIVE) get its speed.
+// so that users who link `mpm::engine` without building it for their machine (MPM_NATIVE) get most of its speed.
 //
 // `with_active_isa(f)` runs f inlined into a function compiled for the active instruction set: `flatten` inlines
-// everything f calls (the kernels are templates and always-inline helpers), and the GCC vector rows of
-// stencil.hpp are then lowered to 256-bit registers. The environment variable MPM_ISA=baseline forces the
-// portable code (to compare the two, or to reproduce a baseline CPU's round-off bit for bit); MPM_ISA=avx2 or
-// auto (the default) take the best the CPU supports. The copies differ in round-off only: the AVX2 code fuses
-// multiply-adds.
+// everything f calls (the kernels are templates and always-inline helpers). The stencil rows keep the portable
+// build's width (std::experimental::simd fixes it per translation unit: two 128-bit halves), now VEX-encoded with
+// fused multiply-adds; the scalar work of the gather (F update, σ, guards) gains most (docs/PERFORMANCE.md).
+// The environment variable MPM_ISA=baseline forces the portable code (to compare the two, or to reproduce a
+// baseline CPU's round-off bit for bit); MPM_ISA=avx2 or auto (the default) take the best the CPU supports. The
+// copies differ in round-off only: the AVX2 code fuses multiply-adds.
 #include <cstdlib>
 #include <stdexcept>
 #include <string>

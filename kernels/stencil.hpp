@@ -3,18 +3,15 @@
 // Keeps the index arithmetic out of the transfer kernels, which then read like the paper's sums.
 //
 // A stencil is a set of rows along axis 0 (one row in 1D, S rows in 2D). A row's axis-0 weights are padded with
-// zeros to `stencil_lanes<S>` (a whole number of SIMD registers: 3 → 4) and held as one SIMD vector, so the hot
-// kernels handle a row of contiguous DOFs in a few vector instructions. The compiler does not find this by itself:
-// it unrolls the 3-node loops and packs them poorly (measured 1.4× slower scatter). The padding lane adds 0.0 to the
-// DOF just past the stencil: the grid reserves ghost columns for it (grid_stride) and the coloured blocks are wide
-// enough that it never belongs to a block of the same colour (cell_bins.hpp), so no scatter races on it.
-//
-// The row is a GCC vector (RowVector): the compiler lowers its operations for the instruction set of the function
-// they end up in, so the same kernel is two SSE2 registers per row in the portable code and one AVX register in
-// the AVX2 code that isa.hpp selects at run time. (std::experimental::simd fixes its register width when the
-// header is included, for the whole translation unit, which rules out a second instruction set in one program.)
+// zeros to `stencil_lanes<S>` (a whole number of SIMD registers: 3 → 4) and held as one SIMD vector
+// (std::experimental::simd, GCC's Parallelism TS v2: two SSE2 registers in a portable build, one AVX register with
+// MPM_NATIVE), so the hot kernels handle a row of contiguous DOFs in a few vector instructions. The compiler does
+// not find this by itself: it unrolls the 3-node loops and packs them poorly (measured 1.4× slower scatter). The padding lane adds 0.0 to the DOF just
+// past the stencil: the grid reserves ghost columns for it (grid_stride) and the coloured blocks are wide enough
+// that it never belongs to a block of the same colour (cell_bins.hpp), so no scatter races on it.
 #include <array>
 #include <cstddef>
+#include <experimental/simd>
 #include <type_traits>
 
 #include "kernels/bspline.hpp"
@@ -36,75 +33,16 @@ inline constexpr int stencil_lanes = stencil_reach(S);
 /// stencil `width` functions wide.
 constexpr int grid_stride(int functions0, int width) { return functions0 + width % 2; }
 
-/// One stencil row of weights or grid values: L doubles in one GCC vector, with the arithmetic the kernels use
-/// (elementwise +, −, ×, and × by a scalar). Every operation is always inlined, so that it is compiled for the
-/// instruction set of the kernel that uses it.
-namespace detail {
-template <int L>
-struct NativeRow;  // (a vector_size that depends on a template parameter is not applied by GCC 12)
-template <>
-struct NativeRow<2> {
-  using type [[gnu::vector_size(16)]] = double;
-};
-template <>
-struct NativeRow<4> {
-  using type [[gnu::vector_size(32)]] = double;
-};
-}  // namespace detail
-
-template <int L>
-struct SimdRow {
-  using Native = typename detail::NativeRow<L>::type;
-  Native v;
-
-  SimdRow() = default;
-  MPM_INLINE SimdRow(double s) {  // NOLINT(google-explicit-constructor): a scalar fills every lane, as in `row = 0.0`
-    for (int i = 0; i < L; ++i) v[i] = s;
-  }
-  MPM_INLINE explicit SimdRow(const Native& n) : v(n) {}
-  /// Lane i = g(i).
-  template <class G>
-    requires std::is_invocable_r_v<double, G, int>
-  MPM_INLINE explicit SimdRow(G&& g) {
-    for (int i = 0; i < L; ++i) v[i] = g(i);
-  }
-
-  MPM_INLINE double operator[](int i) const { return v[i]; }
-  MPM_INLINE void store(double* p) const { __builtin_memcpy(p, &v, sizeof v); }
-  MPM_INLINE SimdRow& operator+=(const SimdRow& o) {
-    v += o.v;
-    return *this;
-  }
-  MPM_INLINE SimdRow& operator-=(const SimdRow& o) {
-    v -= o.v;
-    return *this;
-  }
-  MPM_INLINE friend SimdRow operator+(const SimdRow& a, const SimdRow& b) { return SimdRow(a.v + b.v); }
-  MPM_INLINE friend SimdRow operator-(const SimdRow& a, const SimdRow& b) { return SimdRow(a.v - b.v); }
-  MPM_INLINE friend SimdRow operator*(const SimdRow& a, const SimdRow& b) { return SimdRow(a.v * b.v); }
-  MPM_INLINE friend SimdRow operator*(double s, const SimdRow& a) { return SimdRow(s * a.v); }
-  MPM_INLINE friend SimdRow operator*(const SimdRow& a, double s) { return SimdRow(a.v * s); }
-};
-
-/// The sum of a row's lanes, as pairs of halves: (x0 + x2) + (x1 + x3) for four lanes, the same order in every
-/// instruction set.
-template <int L>
-MPM_INLINE double reduce(const SimdRow<L>& x) {
-  static_assert(L == 2 || L == 4, "rows of 2 or 4 lanes");
-  if constexpr (L == 2) return x.v[0] + x.v[1];
-  else return (x.v[0] + x.v[2]) + (x.v[1] + x.v[3]);
-}
-
-/// One stencil row of weights or grid values, stencil_lanes<S> doubles.
+/// One stencil row of weights or grid values, a SIMD vector of stencil_lanes<S> doubles.
+/// The ABI is the target's native vector of that width where there is one (AVX: one __m256d), else fixed_size:
+/// with fixed_size on an AVX target GCC passed the stencil's rows through the stack and general registers.
 template <int S>
-using RowVector = SimdRow<stencil_lanes<S>>;
+using RowVector = std::experimental::simd<double, std::experimental::simd_abi::deduce_t<double, stencil_lanes<S>>>;
 
 /// The row of grid values starting at p (any alignment).
 template <class V>
 MPM_INLINE V load_row(const double* p) {
-  V x;
-  __builtin_memcpy(&x.v, p, sizeof x.v);
-  return x;
+  return V(p, std::experimental::element_aligned);
 }
 
 /// p[0..lanes) += x.
@@ -112,7 +50,7 @@ template <class V>
 MPM_INLINE void add_to_row(double* p, const V& x) {
   V y = load_row<V>(p);
   y += x;
-  y.store(p);
+  y.copy_to(p, std::experimental::element_aligned);
 }
 
 /// A basis on a Dim-dimensional grid: one axis basis per axis (UniformAxis or CoxDeBoorAxis), all of width S.
@@ -187,8 +125,8 @@ MPM_INLINE Stencil<Dim, S> stencil_at(const TensorBasis<Dim, Axis>& basis, const
   if constexpr (Dim == 2) {
     const AxisRow<S> b = axis_row<S>(basis.axis[1], x[1]);
     st.first1 = b.first;
-    b.w.store(st.wy);
-    b.dw.store(st.dwy);
+    b.w.copy_to(st.wy, std::experimental::element_aligned);
+    b.dw.copy_to(st.dwy, std::experimental::element_aligned);
   }
   return st;
 }
