@@ -67,7 +67,8 @@ class VibratingBar final : public Problem<1> {
 /// Axis-aligned vibrating plate, manufactured solution (paper eqs 38–42, PROBLEMS.md).
 class VibratingPlate final : public Problem<2> {
  public:
-  VibratingPlate(const Scene& s) : mat_(s.material), L_(s.grid.length[0]), A_(s.problem.amplitude) {
+  VibratingPlate(const Scene& s)
+      : mat_(s.material), L_(s.grid.length[0]), A_(s.problem.amplitude), trig_(L_) {
     k_ = Lame::from(mat_);
     c_ = std::sqrt(mat_.E / mat_.density);
   }
@@ -77,7 +78,7 @@ class VibratingPlate final : public Problem<2> {
   bool body_force_needs_reference() const override { return true; }
   bool has_body_force() const override { return true; }
   BodyForce<2> body_force(double t, std::array<const double*, 2> X) const override {
-    return PlateBodyForce::at_time(X, A_, L_, c_, k_.lambda, k_.mu, mat_.density, t);
+    return PlateBodyForce::at_time(X, trig_, A_, L_, c_, k_.lambda, k_.mu, mat_.density, t);
   }
   bool has_exact() const override { return true; }
   ExactState<2> exact(const std::array<double, 2>& X, double t) const override {
@@ -98,6 +99,7 @@ class VibratingPlate final : public Problem<2> {
   MaterialSpec mat_;
   Lame k_;
   double L_, A_, c_;
+  PeriodicSine trig_;  ///< sin and cos of 2π X/L for the body force
 };
 
 /// Column compaction (thesis §5.4.2, PROBLEMS.md): [0, H] fixed at the bottom, body force ramped to b_f over t_f;
