@@ -8,21 +8,10 @@
 #   defaults: build/tools/mpm, 3 repetitions, 2 threads, 64 steps
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-mpm="$root/build/tools/mpm"
-reps=3
-threads=2
 steps=64
-while [[ $# -gt 0 ]]; do
-  case "$1" in
-    --mpm) mpm=$(realpath "$2"); shift 2 ;;
-    --reps) reps="$2"; shift 2 ;;
-    --threads) threads="$2"; shift 2 ;;
-    --steps) steps="$2"; shift 2 ;;
-    -h|--help) sed -n '2,8p' "$0"; exit 0 ;;
-    *) echo "plate_cost.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
-  esac
-done
-[[ -x "$mpm" ]] || { echo "plate_cost.sh: no mpm binary at $mpm (build first, or pass --mpm)" >&2; exit 2; }
+help_lines=8
+# shellcheck source=tools/cost_args.sh
+source "$root/tools/cost_args.sh"
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 rate() { python3 -c "import json, sys; print(json.load(open(sys.argv[1]))['particle_steps_per_s'])" "$work/s.json"; }

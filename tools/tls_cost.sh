@@ -10,21 +10,10 @@
 #   defaults: build/tools/mpm, 3 repetitions, 2 threads, 32 steps (dt = 1e-5)
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
-mpm="$root/build/tools/mpm"
-reps=3
-threads=2
 steps=32
-while [[ $# -gt 0 ]]; do
-  case "$1" in
-    --mpm) mpm=$(realpath "$2"); shift 2 ;;
-    --reps) reps="$2"; shift 2 ;;
-    --threads) threads="$2"; shift 2 ;;
-    --steps) steps="$2"; shift 2 ;;
-    -h|--help) sed -n '2,10p' "$0"; exit 0 ;;
-    *) echo "tls_cost.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
-  esac
-done
-[[ -x "$mpm" ]] || { echo "tls_cost.sh: no mpm binary at $mpm (build first, or pass --mpm)" >&2; exit 2; }
+help_lines=10
+# shellcheck source=tools/cost_args.sh
+source "$root/tools/cost_args.sh"
 end=$(python3 -c "print($steps * 1e-5)")
 summary=$(mktemp)
 trap 'rm -f "$summary"' EXIT
