@@ -24,18 +24,20 @@ enum class Isa {
 
 /// Whether the build carries the AVX2 copy: an x86-64 build not already compiled for AVX2.
 #if defined(__x86_64__) && !defined(__AVX2__)
-inline constexpr bool isa_dispatch = true;
+#define MPM_ISA_DISPATCH 1
 #else
-inline constexpr bool isa_dispatch = false;
+#define MPM_ISA_DISPATCH 0
 #endif
+inline constexpr bool isa_dispatch = MPM_ISA_DISPATCH;
 
 /// Whether this CPU runs the AVX2 copy.
 inline bool cpu_has_avx2_fma() {
-  if constexpr (isa_dispatch) {
-    __builtin_cpu_init();
-    return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
-  }
+#if MPM_ISA_DISPATCH
+  __builtin_cpu_init();
+  return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+#else
   return false;
+#endif
 }
 
 /// The instruction set for `request` (auto, baseline, avx2); throws std::invalid_argument naming MPM_ISA and the
@@ -88,7 +90,7 @@ inline const char* isa_name(Isa isa) {
 #endif
 }
 
-#if defined(__x86_64__) && !defined(__AVX2__)
+#if MPM_ISA_DISPATCH
 namespace detail {
 template <class F>
 [[gnu::target("avx2,fma"), gnu::flatten]] void run_avx2_fma(F& f) {
@@ -100,7 +102,7 @@ template <class F>
 /// Runs f() compiled for the active instruction set.
 template <class F>
 [[gnu::always_inline]] inline void with_active_isa(F&& f) {
-#if defined(__x86_64__) && !defined(__AVX2__)
+#if MPM_ISA_DISPATCH
   if (detail::active_isa == Isa::avx2_fma) {
     detail::run_avx2_fma(f);
     return;
