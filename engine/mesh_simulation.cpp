@@ -124,6 +124,7 @@ MeshSimulation::MeshSimulation(const Scene& scene)
   empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
   dt_ = time_step_for(scene, critical_step());
   steps_total_ = count_steps(scene, dt_);
+  if (scene.time.start == TimeStart::staggered) start_staggered(store_, *problem_, dt_);
 
   const std::size_t functions = std::visit([](const auto& b) { return b.function_count(); }, basis_);
   grid_.m.assign(functions, 0.0);

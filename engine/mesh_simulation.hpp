@@ -58,7 +58,9 @@ class MeshSimulation {
 
   const Conservation& conservation() const { return conservation_; }
   bool has_exact() const { return problem_->has_exact(); }
-  RunErrors errors() const { return particle_errors(store_, *problem_, time_); }
+  RunErrors errors() const {
+    return particle_errors(store_, *problem_, time_, velocity_time(scene_.time.start, step_, time_, dt_));
+  }
   Energy energy() const { return particle_energy(store_, material_); }
   /// The critical step κ h/(c + |v|) with h the mesh's smallest altitude, κ < 1 with the consistent mass.
   CriticalStep critical_step() const;

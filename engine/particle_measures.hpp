@@ -6,6 +6,7 @@
 #include <array>
 #include <cmath>
 #include <cstddef>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -95,9 +96,33 @@ struct SimulationState {
 };
 
 
-/// RMS errors and L2 norms over the particles against the problem's exact solution at time t (paper eq. 43).
+/// The time the velocity column stands for after `step` steps of dt ending at `time` (TimeStart): with the
+/// staggered start, the midpoint of the last step, (time + dt (step - 1)) / 2, which is -dt/2 before the first.
+inline double velocity_time(TimeStart start, long step, double time, double dt) {
+  return start == TimeStart::staggered ? 0.5 * (time + dt * static_cast<double>(step - 1)) : time;
+}
+
+/// The staggered start (TimeStart): every particle takes the exact velocity at t = -dt/2.
 template <int Dim>
-RunErrors particle_errors(const ParticleStore<Dim>& s, const Problem<Dim>& problem, double t) {
+void start_staggered(ParticleStore<Dim>& s, const Problem<Dim>& problem, double dt) {
+  std::array<std::span<const double>, Dim> X;
+  std::array<std::span<double>, Dim> v;
+  for (int d = 0; d < Dim; ++d) {
+    X[d] = s.column(Field::reference, d);
+    v[d] = s.column(Field::velocity, d);
+  }
+  for (std::size_t p = 0; p < s.size(); ++p) {
+    std::array<double, Dim> Xp;
+    for (int d = 0; d < Dim; ++d) Xp[d] = X[d][p];
+    const ExactState<Dim> ex = problem.exact(Xp, -0.5 * dt);
+    for (int d = 0; d < Dim; ++d) v[d][p] = ex.v[d];
+  }
+}
+
+/// RMS errors and L2 norms over the particles against the problem's exact solution at time t (paper eq. 43), the
+/// velocity against it at `t_velocity` (velocity_time).
+template <int Dim>
+RunErrors particle_errors(const ParticleStore<Dim>& s, const Problem<Dim>& problem, double t, double t_velocity) {
   const std::size_t n = s.size();
   std::array<std::span<const double>, Dim> x, X, v;
   for (int d = 0; d < Dim; ++d) {
@@ -112,10 +137,11 @@ RunErrors particle_errors(const ParticleStore<Dim>& s, const Problem<Dim>& probl
     std::array<double, Dim> Xp;
     for (int d = 0; d < Dim; ++d) Xp[d] = X[d][p];
     const ExactState<Dim> ex = problem.exact(Xp, t);
+    const std::array<double, Dim> v_exact = t_velocity == t ? ex.v : problem.exact(Xp, t_velocity).v;
     for (int d = 0; d < Dim; ++d) {
       eu += std::pow(x[d][p] - X[d][p] - ex.u[d], 2);
       nu += ex.u[d] * ex.u[d];
-      ev += std::pow(v[d][p] - ex.v[d], 2);
+      ev += std::pow(v[d][p] - v_exact[d], 2);
     }
     for (int a = 0; a < Dim; ++a)
       for (int b = 0; b < Dim; ++b) {

@@ -139,7 +139,7 @@ const std::vector<std::pair<std::string, Keys>>& sections() {
       {"particles", {"per_cell", "layout", "seed"}},
       {"material", {"model", "E", "nu", "density"}},
       {"algorithm", {"update", "mass", "mapping", "gauss_per_cell", "mls_support", "tls_degree", "ddmpm_subpoints"}},
-      {"time", {"dt", "cfl", "end", "energy_tolerance"}},
+      {"time", {"dt", "cfl", "end", "energy_tolerance", "start"}},
       {"output", {"file", "every", "checkpoint_every"}},
   };
   return s;
@@ -303,6 +303,8 @@ constexpr std::array<std::pair<const char*, Mapping>, 4> kMapping{{{"direct", Ma
                                                                    {"mls", Mapping::mls},
                                                                    {"tls", Mapping::tls},
                                                                    {"cubic-spline", Mapping::cubic_spline}}};
+constexpr std::array<std::pair<const char*, TimeStart>, 2> kTimeStart{
+    {{"collocated", TimeStart::collocated}, {"staggered", TimeStart::staggered}}};
 const Keys kSides{"x-", "x+", "y-", "y+"};
 
 /// What a built-in problem brings: its dimension, parameters and the defaults of the keys a scene may omit.
@@ -314,18 +316,19 @@ struct ProblemInfo {
   MaterialSpec material;
   double dt, end;
   std::vector<int> fixed;
+  bool exact_before_start;  ///< the exact solution holds for t < 0 (a vibration), so time.start may be "staggered"
 };
 
 const std::vector<ProblemInfo>& problems() {
   using M = MaterialModel;
   static const std::vector<ProblemInfo> p = {
-      {"vibrating-bar", ProblemName::vibrating_bar, 1, {"v0"}, {M::linear_elastic, 7e6, 0.0, 2000.0}, 1e-7, 1.9e-6, {0, 1}},
+      {"vibrating-bar", ProblemName::vibrating_bar, 1, {"v0"}, {M::linear_elastic, 7e6, 0.0, 2000.0}, 1e-7, 1.9e-6, {0, 1}, true},
       {"vibrating-plate", ProblemName::vibrating_plate, 2, {"amplitude"}, {M::neo_hookean, 1e7, 0.3, 1000.0}, 1e-5, 0.2,
-       {0, 1, 2, 3}},
+       {0, 1, 2, 3}, true},
       {"column-compaction", ProblemName::column_compaction, 1, {"height", "max_body_force", "ramp_time"},
-       {M::linear_elastic, 1e6, 0.0, 1.0}, 1e-4, 0.5, {0}},
+       {M::linear_elastic, 1e6, 0.0, 1.0}, 1e-4, 0.5, {0}, false},
       {"vibrating-bar-traction", ProblemName::vibrating_bar_traction, 1, {}, {M::neo_hookean, 100.0, 0.0, 100.0}, 1e-4,
-       0.4, {0}},
+       0.4, {0}, false},
   };
   return p;
 }
@@ -438,6 +441,7 @@ json source_of(const Scene& s, const ProblemInfo* info) {
   if (s.time.dt) j["time"]["dt"] = *s.time.dt;
   if (s.time.cfl) j["time"]["cfl"] = *s.time.cfl;
   j["time"]["energy_tolerance"] = s.time.energy_tolerance;
+  j["time"]["start"] = name_of(s.time.start, kTimeStart);
   j["output"] = {{"file", s.output.file}, {"every", s.output.every}, {"checkpoint_every", s.output.checkpoint_every}};
   if (!s.bodies.empty()) {
     json bodies = json::array();
@@ -645,6 +649,12 @@ void read_time(const Node& top, Scene& s, const ProblemInfo* info) {
   s.time.energy_tolerance = number(time, "energy_tolerance", s.time.energy_tolerance, positive,
                                    "a positive number (allowed energy gain beyond the external work, as a fraction "
                                    "of the largest energy; default 0.15)");
+  s.time.start = choice(time, "start", TimeStart::collocated, kTimeStart);
+  if (s.time.start == TimeStart::staggered && !(info && info->exact_before_start))
+    fail("time.start", "staggered",
+         "the velocity at t = -dt/2 comes from the exact solution of a vibration: expected problem.name = "
+         "\"vibrating-bar\" or \"vibrating-plate\", not " +
+             (info ? "\"" + std::string(info->name) + "\"" : std::string("a scene of bodies")));
   if (s.time.dt) {
     if (s.time.end < *s.time.dt) fail("time.end", s.time.end, "expected end ≥ time.dt = " + num(*s.time.dt));
     if (s.time.end / *s.time.dt > 1e9)

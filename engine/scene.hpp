@@ -27,6 +27,11 @@ enum class MaterialModel { linear_elastic, neo_hookean };
 enum class Update { usl, musl, usf, otm, unified };
 enum class MassMatrix { lumped, projection, consistent };
 enum class Mapping { direct, mls, tls, cubic_spline };
+/// When the particle velocity is taken to live. The explicit update is leapfrog: a step from t to t + h computes the
+/// grid velocity of t + h/2 and moves the particles with it, so the velocity a particle carries after the step is
+/// v(t + h/2). `collocated` (the papers') starts from v(0) and reports the velocity as v(t); `staggered` starts
+/// from the exact v(-dt/2) and compares with v(t - h/2), h the last step (RESULTS.md §6 measures the difference).
+enum class TimeStart { collocated, staggered };
 enum class ProblemName { none, vibrating_bar, vibrating_plate, column_compaction, vibrating_bar_traction };
 
 /// OTM (thesis Algorithm 3) and the unified approach (Algorithm 4) carry their basis with the body: each particle
@@ -98,6 +103,7 @@ struct TimeSpec {
   /// from the stability suite (docs/STABILITY.md, "Energy balance"): the completed, accurate runs gain at most 0.13
   /// (most below 0.001), the blow-ups 0.5–1.
   double energy_tolerance = 0.15;
+  TimeStart start = TimeStart::collocated;
 };
 
 struct OutputSpec {

@@ -265,6 +265,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
 
   dt_ = time_step_for(scene, critical_step());
   steps_total_ = count_steps(scene, dt_);
+  if (scene.time.start == TimeStart::staggered) start_staggered(store_, *problem_, dt_);
   empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
 
   grid_ = make_grid<Dim>(scene);
@@ -618,7 +619,7 @@ double Simulation<Dim>::step_with(const B& basis, const M& material, const F& bo
 
 template <int Dim>
 RunErrors Simulation<Dim>::errors() const {
-  return particle_errors(store_, *problem_, time_);
+  return particle_errors(store_, *problem_, time_, velocity_time(scene_.time.start, step_, time_, dt_));
 }
 
 template <int Dim>
