@@ -156,44 +156,52 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
                                        GridView<Dim> g, const unsigned* order, std::size_t begin,
                                        std::size_t end, const Body& body) {
   MomentumTotals<Dim> totals;
-  for (std::size_t k = begin; k < end; ++k) {
-    const std::size_t ip = order[k];
-    const auto st = stencil_of<Dim, S>(basis, basis_points<Fields.reference>(p), ip);
-    const double mp = p.m[ip];
-    double mv[Dim] = {};
-    if constexpr (Fields.momentum) {
-      double vp[Dim];
-      for (int d = 0; d < Dim; ++d) {
-        vp[d] = p.v[d][ip];
-        mv[d] = mp * vp[d];
-      }
-      totals.add(mp, vp);
-    }
-    double Vsig[Dim][Dim] = {};  // V_p σ_p
-    double mb[Dim] = {};         // m_p b_p
-    if constexpr (Fields.force) {
-      const double V = det(p, ip) * p.V0[ip];  // eq. 2.42
-      if constexpr (Fields.reference && Dim == 2) {  // V F⁻¹ σ = V0 adj(F) σ
-        const double adj[2][2] = {{p.F[3][ip], -p.F[1][ip]}, {-p.F[2][ip], p.F[0][ip]}};
-        for (int a = 0; a < 2; ++a)
-          for (int b = 0; b < 2; ++b) Vsig[a][b] = p.V0[ip] * (adj[a][0] * p.s[sym_index<2>(0, b)][ip] + adj[a][1] * p.s[sym_index<2>(1, b)][ip]);
-      } else if constexpr (Fields.reference) {  // V / F = V0
-        Vsig[0][0] = p.V0[ip] * p.s[0][ip];
-      } else {
-        for (int a = 0; a < Dim; ++a)
-          for (int b = 0; b < Dim; ++b) Vsig[a][b] = V * p.s[sym_index<Dim>(a, b)][ip];
-      }
-      if constexpr (Body::active) {
-        const auto b = body.template at<Dim>(ip);
-        for (int d = 0; d < Dim; ++d) mb[d] = mp * b[d];
-      }
-      if constexpr (Dim == 1 && WithSubpoints<Axis>)
-        if (basis.axis[0].subpoints > 1) {
-          scatter_subpoint_stress<S>(basis, g, p.x[0][ip], V, Vsig[0][0]);
-          Vsig[0][0] = 0.0;  // the particle itself carries mass, momentum and body force only
+  // The body force in a first loop over a batch of particles: a body force may call log (the plate's), and around a
+  // call inside the scatter loop its live vector registers were spilled and reloaded (as in gather_g2p)
+  constexpr bool batched_body = Fields.force && Body::active;
+  constexpr std::size_t batch = 64;
+  [[maybe_unused]] std::array<double, Dim> body_at[batch];
+  for (std::size_t first = begin; first < end; first += batch) {
+    const std::size_t last = std::min(end, first + batch);
+    if constexpr (batched_body)
+      for (std::size_t k = first; k < last; ++k) body_at[k - first] = body.template at<Dim>(order[k]);
+    for (std::size_t k = first; k < last; ++k) {
+      const std::size_t ip = order[k];
+      const auto st = stencil_of<Dim, S>(basis, basis_points<Fields.reference>(p), ip);
+      const double mp = p.m[ip];
+      double mv[Dim] = {};
+      if constexpr (Fields.momentum) {
+        double vp[Dim];
+        for (int d = 0; d < Dim; ++d) {
+          vp[d] = p.v[d][ip];
+          mv[d] = mp * vp[d];
         }
+        totals.add(mp, vp);
+      }
+      double Vsig[Dim][Dim] = {};  // V_p σ_p
+      double mb[Dim] = {};         // m_p b_p
+      if constexpr (Fields.force) {
+        const double V = det(p, ip) * p.V0[ip];  // eq. 2.42
+        if constexpr (Fields.reference && Dim == 2) {  // V F⁻¹ σ = V0 adj(F) σ
+          const double adj[2][2] = {{p.F[3][ip], -p.F[1][ip]}, {-p.F[2][ip], p.F[0][ip]}};
+          for (int a = 0; a < 2; ++a)
+            for (int b = 0; b < 2; ++b) Vsig[a][b] = p.V0[ip] * (adj[a][0] * p.s[sym_index<2>(0, b)][ip] + adj[a][1] * p.s[sym_index<2>(1, b)][ip]);
+        } else if constexpr (Fields.reference) {  // V / F = V0
+          Vsig[0][0] = p.V0[ip] * p.s[0][ip];
+        } else {
+          for (int a = 0; a < Dim; ++a)
+            for (int b = 0; b < Dim; ++b) Vsig[a][b] = V * p.s[sym_index<Dim>(a, b)][ip];
+        }
+        if constexpr (batched_body)
+          for (int d = 0; d < Dim; ++d) mb[d] = mp * body_at[k - first][d];
+        if constexpr (Dim == 1 && WithSubpoints<Axis>)
+          if (basis.axis[0].subpoints > 1) {
+            scatter_subpoint_stress<S>(basis, g, p.x[0][ip], V, Vsig[0][0]);
+            Vsig[0][0] = 0.0;  // the particle itself carries mass, momentum and body force only
+          }
+      }
+      scatter_rows<Fields>(st, g, mp, mv, Vsig, mb);
     }
-    scatter_rows<Fields>(st, g, mp, mv, Vsig, mb);
   }
   return totals;
 }
