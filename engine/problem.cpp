@@ -83,12 +83,13 @@ class VibratingPlate final : public Problem<2> {
   bool has_exact() const override { return true; }
   ExactState<2> exact(const std::array<double, 2>& X, double t) const override {
     const double wt = c_ * pi * t / L_;
-    const double sx = std::sin(2 * pi * X[0] / L_), sy = std::sin(2 * pi * X[1] / L_);
+    const auto [sx, cx] = trig_(X[0]);
+    const auto [sy, cy] = trig_(X[1]);
     ExactState<2> e;
     e.u = {A_ * sx * std::sin(wt), A_ * sy * std::sin(wt + pi)};
     e.v = {A_ * c_ * pi / L_ * sx * std::cos(wt), A_ * c_ * pi / L_ * sy * std::cos(wt + pi)};
-    const double F11 = 1 + (2 * pi * A_ / L_) * std::cos(2 * pi * X[0] / L_) * std::sin(wt);
-    const double F22 = 1 + (2 * pi * A_ / L_) * std::cos(2 * pi * X[1] / L_) * std::sin(wt + pi);
+    const double F11 = 1 + (2 * pi * A_ / L_) * cx * std::sin(wt);
+    const double F22 = 1 + (2 * pi * A_ / L_) * cy * std::sin(wt + pi);
     const double J = F11 * F22, lnJ = std::log(J);
     e.sigma = {(k_.lambda * lnJ + k_.mu * (F11 * F11 - 1)) / J, 0.0, 0.0,
                (k_.lambda * lnJ + k_.mu * (F22 * F22 - 1)) / J};
@@ -99,7 +100,7 @@ class VibratingPlate final : public Problem<2> {
   MaterialSpec mat_;
   Lame k_;
   double L_, A_, c_;
-  PeriodicSine trig_;  ///< sin and cos of 2π X/L for the body force
+  PeriodicSine trig_;  ///< sin and cos of 2π X/L for the body force and the exact solution
 };
 
 /// Column compaction (thesis §5.4.2, PROBLEMS.md): [0, H] fixed at the bottom, body force ramped to b_f over t_f;
