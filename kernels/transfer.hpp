@@ -43,11 +43,17 @@ MPM_INLINE auto basis_points(const ParticleView<Dim>& p) {
   else return p.x;
 }
 
+/// The scatter asks a body force for this many particles at a time (at_batch).
+inline constexpr std::size_t body_force_batch = 64;
+
 /// Body force per unit mass: none.
 struct NoBodyForce {
   static constexpr bool active = false;
   template <int Dim>
   std::array<double, Dim> at(std::size_t) const { return {}; }
+  /// The force at particles index[0..count) into out (a body force's batch form, used by the scatter).
+  template <int Dim>
+  void at_batch(const unsigned*, std::size_t, std::array<double, Dim>*) const {}
 };
 
 template <int Dim>
@@ -156,15 +162,16 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
                                        GridView<Dim> g, const unsigned* order, std::size_t begin,
                                        std::size_t end, const Body& body) {
   MomentumTotals<Dim> totals;
-  // The body force in a first loop over a batch of particles: a body force may call log (the plate's), and around a
-  // call inside the scatter loop its live vector registers were spilled and reloaded (as in gather_g2p)
+  // The body force in a first loop over a batch of particles: a body force may take a log (the plate's), and around
+  // it the scatter loop's live vector registers were spilled and reloaded (as in gather_g2p); in a batch its
+  // arithmetic runs in vector lanes
   constexpr bool batched_body = Fields.force && Body::active;
-  constexpr std::size_t batch = 64;
+  constexpr std::size_t batch = body_force_batch;
   [[maybe_unused]] std::array<double, Dim> body_at[batch];
   for (std::size_t first = begin; first < end; first += batch) {
     const std::size_t last = std::min(end, first + batch);
     if constexpr (batched_body)
-      for (std::size_t k = first; k < last; ++k) body_at[k - first] = body.template at<Dim>(order[k]);
+      body.template at_batch<Dim>(order + first, last - first, body_at);
     for (std::size_t k = first; k < last; ++k) {
       const std::size_t ip = order[k];
       const auto st = stencil_of<Dim, S>(basis, basis_points<Fields.reference>(p), ip);

@@ -80,3 +80,31 @@ TEST_CASE("the plate's body force balances its exact solution", "[body-force]") 
     CHECK(worst <= 1e-6 * scale);
   }
 }
+
+TEST_CASE("the plate's body force for a batch of particles equals it particle by particle", "[body-force]") {
+  // the scatter asks for batches (at_batch), the energy balance and the TLS right-hand side for one particle (at)
+  const Scene scene = parse_scene(test::plate_scene(8, 0.05));
+  const auto problem = make_problem<2>(scene);
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> u(-0.01, 1.01);  // a little outside the body too
+  std::vector<double> X0(200), X1(200);
+  std::vector<unsigned> order(200);
+  for (std::size_t p = 0; p < X0.size(); ++p) {
+    X0[p] = u(rng);
+    X1[p] = u(rng);
+    order[p] = static_cast<unsigned>(p);
+  }
+  std::shuffle(order.begin(), order.end(), rng);
+  const BodyForce<2> force = problem->body_force(0.007, {X0.data(), X1.data()});
+  const auto& plate = std::get<PlateBodyForce>(force);
+  for (const std::size_t count : {std::size_t{1}, std::size_t{7}, body_force_batch}) {
+    std::array<double, 2> batch[body_force_batch];
+    plate.at_batch<2>(order.data() + 3, count, batch);
+    for (std::size_t j = 0; j < count; ++j) {
+      const auto single = plate.at<2>(order[3 + j]);
+      INFO("batch of " << count << ", entry " << j);
+      CHECK(batch[j][0] == single[0]);
+      CHECK(batch[j][1] == single[1]);
+    }
+  }
+}
