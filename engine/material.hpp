@@ -7,6 +7,7 @@
 #include <variant>
 
 #include "engine/scene.hpp"
+#include "kernels/vector_log.hpp"
 #include "kernels/views.hpp"
 
 namespace mpm {
@@ -45,17 +46,18 @@ struct LinearElastic {
   }
 };
 
-/// Compressible neo-Hookean, eq. 2.14: σ = (λ ln J / J) I + (μ/J)(F Fᵀ − I).
+/// Compressible neo-Hookean, eq. 2.14: σ = (λ ln J / J) I + (μ/J)(F Fᵀ − I). The stress takes its log by
+/// vector_log, so that the gather's batch of stresses runs in vector lanes.
 struct NeoHookean {
   Lame k;
   template <int Dim>
   void stress(const double* F, double* s) const {
     if constexpr (Dim == 1) {
       const double J = F[0];
-      s[0] = (k.lambda * std::log(J) + k.mu * (J * J - 1.0)) / J;
+      s[0] = (k.lambda * vector_log(J) + k.mu * (J * J - 1.0)) / J;
     } else {
       const double J = F[0] * F[3] - F[1] * F[2];
-      const double a = k.lambda * std::log(J), inv_J = 1.0 / J;
+      const double a = k.lambda * vector_log(J), inv_J = 1.0 / J;
       s[0] = (a + k.mu * (F[0] * F[0] + F[1] * F[1] - 1.0)) * inv_J;
       s[1] = k.mu * (F[0] * F[2] + F[1] * F[3]) * inv_J;
       s[2] = (a + k.mu * (F[2] * F[2] + F[3] * F[3] - 1.0)) * inv_J;

@@ -251,7 +251,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
                            ParticleGuard& guard) {
   const std::array<double, 3> hi = guard.hi, inv_h = guard.inv_h;  // copies, as the views (views.hpp)
   double max_move = 0.0;  // cells
-  // σ(F) in a second loop over a batch of particles: the constitutive law calls log, and around a call inside the
+  // σ(F) in a second loop over a batch of particles: the constitutive law takes a log, and around a call inside the
   // gather loop every live vector register of the gather was spilled and reloaded (caller-saved in the x86-64 ABI)
   constexpr std::size_t batch = 64;
   for (std::size_t first = begin; first < end; first += batch) {
@@ -302,15 +302,22 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
         for (int d = 0; d < Dim; ++d)
           if (!(p.x[d][ip] >= 0.0 && p.x[d][ip] <= hi[d]) || !std::isfinite(p.v[d][ip])) guard.flag(ip);
     }
-    if constexpr (Fields.deformation)
+    if constexpr (Fields.deformation) {
+      // σ into a local batch first, a loop without calls or stores that may alias F, which the compiler runs in
+      // vector lanes (the neo-Hookean log is vector_log); then stored, with the guard's checks
+      double s_batch[sym_components<Dim>][batch];
       for (std::size_t ip = first; ip < last; ++ip) {
         double F[Dim * Dim], s[sym_components<Dim>];
         for (int c = 0; c < Dim * Dim; ++c) F[c] = p.F[c][ip];
         stress(F, s);
-        for (int c = 0; c < sym_components<Dim>; ++c) p.s[c][ip] = s[c];
-        const double J = Dim == 1 ? F[0] : F[0] * F[3] - F[1] * F[2];
-        if (!(J > 0.0) || !std::isfinite(J + s[0])) guard.flag(ip);
+        for (int c = 0; c < sym_components<Dim>; ++c) s_batch[c][ip - first] = s[c];
       }
+      for (std::size_t ip = first; ip < last; ++ip) {
+        for (int c = 0; c < sym_components<Dim>; ++c) p.s[c][ip] = s_batch[c][ip - first];
+        const double J = det(p, ip);
+        if (!(J > 0.0) || !std::isfinite(J + s_batch[0][ip - first])) guard.flag(ip);
+      }
+    }
   }
   if constexpr (Fields.position && !Fields.reference) guard.moved(max_move);  // (reference: binned once, by X)
 }
