@@ -1,7 +1,8 @@
 #pragma once
 // The natural logarithm in arithmetic the compiler can vectorise: libm's log is a call, which stops the
 // vectoriser and, inside a hot loop, spills its live vector registers. Here every branch is a bit mask, so a loop
-// over particles that takes a log runs 4 (AVX2) or 2 (SSE2) of them at once.
+// over particles that takes a log runs 4 of them at once in the AVX2 copy of the kernels (kernels/isa.hpp); the
+// SSE2 code stays scalar (SSE2 has no 64-bit integer compares), without the call.
 //
 // The method is fdlibm's (e_log.c): x = 2^k m with m in [√2/2, √2), f = m − 1, s = f/(2 + f), and
 // log(1 + f) = f − f²/2 + s (f²/2 + R(s²)), R a degree-14 minimax polynomial in s with its published
