@@ -1,7 +1,7 @@
 #pragma once
 // The engine's reduction: a sum whose result does not depend on the thread count.
+#include <array>
 #include <cstddef>
-#include <functional>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_reduce.h>
@@ -10,25 +10,42 @@
 
 namespace mpm {
 
-/// Deterministic parallel sum of f(i) over [0, n): fixed chunks, fixed combination order, compensated. Within a
-/// chunk four interleaved sums (i mod 4) break the dependency chain of one running sum, which had made the
-/// conservation checks latency-bound.
+/// Deterministic parallel sums of the K components of f(i) (a std::array<double, K>) over [0, n): fixed chunks,
+/// fixed combination order, compensated. Within a chunk four interleaved sums (i mod 4) break the dependency chain
+/// of one running sum, which had made the conservation checks latency-bound.
+template <std::size_t K, class F>
+std::array<double, K> deterministic_sums(std::size_t n, F&& f) {
+  constexpr std::size_t lanes = 4;
+  using Sums = std::array<CompensatedSum, K>;
+  const auto plus = [](Sums a, const Sums& b) {
+    for (std::size_t k = 0; k < K; ++k) a[k] = a[k] + b[k];
+    return a;
+  };
+  const Sums total = tbb::parallel_deterministic_reduce(
+      tbb::blocked_range<std::size_t>(0, n, 4096), Sums{},
+      [&](const tbb::blocked_range<std::size_t>& r, Sums acc) {
+        Sums lane[lanes] = {};
+        const auto add = [&](Sums& to, std::size_t i) {
+          const std::array<double, K> v = f(i);
+          for (std::size_t k = 0; k < K; ++k) to[k].add(v[k]);
+        };
+        std::size_t i = r.begin();
+        for (; i + lanes <= r.end(); i += lanes)
+          for (std::size_t l = 0; l < lanes; ++l) add(lane[l], i + l);
+        for (; i < r.end(); ++i) add(lane[0], i);
+        for (const auto& l : lane) acc = plus(acc, l);
+        return acc;
+      },
+      plus);
+  std::array<double, K> out;
+  for (std::size_t k = 0; k < K; ++k) out[k] = total[k].value();
+  return out;
+}
+
+/// Deterministic parallel sum of f(i) over [0, n) (deterministic_sums of one component).
 template <class F>
 double deterministic_sum(std::size_t n, F&& f) {
-  constexpr std::size_t lanes = 4;
-  return tbb::parallel_deterministic_reduce(
-             tbb::blocked_range<std::size_t>(0, n, 4096), CompensatedSum{},
-             [&](const tbb::blocked_range<std::size_t>& r, CompensatedSum acc) {
-               CompensatedSum lane[lanes];
-               std::size_t i = r.begin();
-               for (; i + lanes <= r.end(); i += lanes)
-                 for (std::size_t k = 0; k < lanes; ++k) lane[k].add(f(i + k));
-               for (; i < r.end(); ++i) lane[0].add(f(i));
-               for (const auto& l : lane) acc = acc + l;
-               return acc;
-             },
-             std::plus<>())
-      .value();
+  return deterministic_sums<1>(n, [&](std::size_t i) { return std::array<double, 1>{f(i)}; })[0];
 }
 
 }  // namespace mpm
