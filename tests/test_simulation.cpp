@@ -1,9 +1,15 @@
 // Whole-solver unit tests: what a scene allocates and runs, determinism across thread counts, fast path equal to
 // the generic path over a run, guards that stop an unstable run with a precise reason.
 #include <algorithm>
+#include <array>
+#include <cmath>
+#include <random>
+#include <vector>
 
 #include <catch2/catch.hpp>
+#include <tbb/global_control.h>
 
+#include "engine/deterministic_sum.hpp"
 #include "scene_builders.hpp"
 
 using namespace mpm;
@@ -75,6 +81,46 @@ TEST_CASE("1-thread and 2-thread runs are bitwise identical", "[simulation][para
   }
   const auto bar = bar_scene(40, "bspline2", "projection");
   CHECK(state_after<1>(bar, 19, 1) == state_after<1>(bar, 19, 2));
+}
+
+TEST_CASE("deterministic_sums: serial sums to round-off, the same bits on 1 and 2 threads", "[simulation][parallel]") {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> value(-1.0, 1.0);
+  std::vector<std::array<double, 3>> terms(100003);  // chunks of 4096 and a remainder
+  for (auto& t : terms) t = {value(rng), std::exp(4 * value(rng)), 1e-8 * value(rng)};
+  const auto term = [&](std::size_t i) { return terms[i]; };
+  std::array<double, 3> sums[2];
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    sums[threads - 1] = deterministic_sums<3>(terms.size(), term);
+  }
+  CHECK(sums[0] == sums[1]);
+  for (int k = 0; k < 3; ++k) {
+    long double serial = 0, scale = 0;  // the independent reference: one serial sum in extended precision
+    for (const auto& t : terms) {
+      serial += t[k];
+      scale += std::abs(t[k]);
+    }
+    INFO("component " << k);
+    CHECK(std::abs(sums[0][k] - static_cast<double>(serial)) <= 1e-15 * static_cast<double>(scale));
+    CHECK(deterministic_sum(terms.size(), [&](std::size_t i) { return terms[i][k]; }) == sums[0][k]);
+  }
+}
+
+TEST_CASE("errors against the exact solution are the same bits on 1 and 2 threads", "[simulation][parallel]") {
+  Simulation<2> sim(parse_scene(plate_scene(16)));
+  for (int s = 0; s < 10; ++s) sim.step();
+  RunErrors e[2];
+  for (int threads : {1, 2}) {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
+    e[threads - 1] = sim.errors();
+  }
+  CHECK(e[0].displacement_rms > 0.0);
+  CHECK(e[0].displacement_rms == e[1].displacement_rms);
+  CHECK(e[0].velocity_rms == e[1].velocity_rms);
+  CHECK(e[0].stress_rms == e[1].stress_rms);
+  CHECK(e[0].displacement_l2 == e[1].displacement_l2);
+  CHECK(e[0].stress_l2 == e[1].stress_l2);
 }
 
 TEST_CASE("fast and generic basis paths give the same run to 1e-12", "[simulation][fast]") {
