@@ -1,5 +1,5 @@
 #pragma once
-// The engine's reduction: a sum whose result does not depend on the thread count.
+// The engine's reductions: sums whose results do not depend on the thread count.
 #include <array>
 #include <cstddef>
 
