@@ -23,8 +23,10 @@ inline double vector_log(double x) {
   const double scaled = x * std::bit_cast<double>(one + (subnormal * 52 << 52));
   // offsetting the bits by one − bits(√2/2) carries the exponent over exactly when the mantissa passes √2/2
   const u64 shifted = std::bit_cast<u64>(scaled) + (one - sqrt_half);
-  const u64 biased_k = (shifted >> 52) - subnormal * 52;                                  // k + 1023
-  const double k = std::bit_cast<double>(biased_k | 0x4330000000000000) - (0x1p52 + 1023);  // exact
+  // k + 1023 of the scaled x, as a double (exact); a subnormal's k is 52 less, subtracted as a double (in the
+  // integer the difference would wrap below zero)
+  const double biased_k = std::bit_cast<double>((shifted >> 52) | 0x4330000000000000) - 0x1p52;
+  const double k = biased_k - 1023 - std::bit_cast<double>(-subnormal & std::bit_cast<u64>(52.0));
   const double m = std::bit_cast<double>((shifted & mantissa) + sqrt_half);
   const double f = m - 1, s = f / (2 + f), z = s * s, w = z * z;
   const double odd = z * (6.666666666666735130e-01 +
