@@ -73,7 +73,7 @@ class GaussPoints {
       const bool two_by_two = table.n[0] == 2 && table.n[1] == 2;  // the default rule, unrolled
       const unsigned* cells = store_.cell_of_slot.data();
       bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
-        with_active_isa([&] {
+        with_active_isa([&](auto) {
           if (two_by_two)
             scatter_gauss_cells<Fields, Body, S, 2>(table, basis.axis[0], basis.axis[1], gp, g, cells, b, e);
           else
@@ -83,7 +83,7 @@ class GaussPoints {
     } else {
       const unsigned* order = bins.order().data();
       bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
-        with_active_isa([&] { scatter_gauss<Fields, Body, Dim, S>(basis, gp, g, order, b, e); });
+        with_active_isa([&](auto) { scatter_gauss<Fields, Body, Dim, S>(basis, gp, g, order, b, e); });
       });
     }
   }

@@ -22,7 +22,7 @@ struct Lame {
 /// Small-strain linear elasticity, eq. 2.13: σ = λ tr(ε) I + 2μ ε, ε = ½(F + Fᵀ) − I.
 struct LinearElastic {
   Lame k;
-  template <int Dim>
+  template <int Dim, Isa = Isa::baseline>
   void stress(const double* F, double* s) const {
     if constexpr (Dim == 1) {
       s[0] = (k.lambda + 2 * k.mu) * (F[0] - 1.0);
@@ -47,17 +47,18 @@ struct LinearElastic {
 };
 
 /// Compressible neo-Hookean, eq. 2.14: σ = (λ ln J / J) I + (μ/J)(F Fᵀ − I). The stress takes its log by
-/// vector_log, so that the gather's batch of stresses runs in vector lanes.
+/// log_for<I> (vector_log in AVX2 code), so that the gather's batch of stresses runs in vector lanes.
 struct NeoHookean {
   Lame k;
-  template <int Dim>
+  /// σ(F) in code compiled for instruction set I (the laws' stress<Dim, I>; the default: the build's own).
+  template <int Dim, Isa I = Isa::baseline>
   void stress(const double* F, double* s) const {
     if constexpr (Dim == 1) {
       const double J = F[0];
-      s[0] = (k.lambda * vector_log(J) + k.mu * (J * J - 1.0)) / J;
+      s[0] = (k.lambda * log_for<I>(J) + k.mu * (J * J - 1.0)) / J;
     } else {
       const double J = F[0] * F[3] - F[1] * F[2];
-      const double a = k.lambda * vector_log(J), inv_J = 1.0 / J;
+      const double a = k.lambda * log_for<I>(J), inv_J = 1.0 / J;
       s[0] = (a + k.mu * (F[0] * F[0] + F[1] * F[1] - 1.0)) * inv_J;
       s[1] = k.mu * (F[0] * F[2] + F[1] * F[3]) * inv_J;
       s[2] = (a + k.mu * (F[2] * F[2] + F[3] * F[3] - 1.0)) * inv_J;

@@ -25,7 +25,7 @@ struct UniformBodyForce {
   std::array<double, Dim> b;
   template <int D>
   std::array<double, D> at(std::size_t) const { return b; }
-  template <int D>
+  template <int D, Isa = Isa::baseline>
   void at_batch(const unsigned*, std::size_t count, std::array<double, D>* out) const {
     std::fill_n(out, count, b);
   }
@@ -36,7 +36,7 @@ struct UniformBodyForce {
 /// the fixed reference coordinates come from the problem's table (PeriodicSine), so a particle costs a log and a few
 /// table reads: with libm's sin and cos per particle and step the large plate ran at 0.6× the throughput of a
 /// scene without body force. The scatter asks for a batch of particles (at_batch): the table reads come first,
-/// then the arithmetic and the log (vector_log) run in vector lanes.
+/// then the arithmetic and the log (log_for, vector_log in AVX2 code) run in vector lanes.
 struct PlateBodyForce {
   static constexpr bool active = true;
   std::array<const double*, 2> X;  ///< reference positions
@@ -63,8 +63,8 @@ struct PlateBodyForce {
     }
   }
 
-  /// out[j] = at(index[j]) for j < count ≤ body_force_batch, by the same arithmetic.
-  template <int D>
+  /// out[j] = at(index[j]) for j < count ≤ body_force_batch, by the same arithmetic, in code compiled for I.
+  template <int D, Isa I = Isa::baseline>
   void at_batch(const unsigned* index, std::size_t count, std::array<double, D>* out) const {
     if constexpr (D == 2) {
       double sin_i[2][body_force_batch], cos_i[2][body_force_batch], b[2][body_force_batch];  // the table reads (gathers)
@@ -76,17 +76,18 @@ struct PlateBodyForce {
           b[d][j] = n.b;
         }
       for (std::size_t j = 0; j < count; ++j)  // unit-stride arithmetic: vectorised
-        out[j] = force(sin_i[0][j], cos_i[0][j], b[0][j], sin_i[1][j], cos_i[1][j], b[1][j]);
+        out[j] = force<I>(sin_i[0][j], cos_i[0][j], b[0][j], sin_i[1][j], cos_i[1][j], b[1][j]);
     }
   }
 
  private:
+  template <Isa I = Isa::baseline>
   std::array<double, 2> force(double sin_xi, double cos_xi, double bx, double sin_yi, double cos_yi,
                               double by) const {
     const auto [sin_x, cos_x] = PeriodicSine::rotate(sin_xi, cos_xi, bx);
     const auto [sin_y, cos_y] = PeriodicSine::rotate(sin_yi, cos_yi, by);
     const double F11 = 1 + F_amp[0] * cos_x, F22 = 1 + F_amp[1] * cos_y;
-    const double kk = lambda * (vector_log(F11 * F22) - 1) - mu;
+    const double kk = lambda * (log_for<I>(F11 * F22) - 1) - mu;
     return {scale * u_amp[0] * sin_x * (common - 4 * kk / (rho0 * F11 * F11)),
             scale * u_amp[1] * sin_y * (common - 4 * kk / (rho0 * F22 * F22))};
   }

@@ -461,7 +461,7 @@ class Simulation<Dim>::Step {
     } else {
       const unsigned* order = sim_.bins_.order().data();
       sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-        with_active_isa([&] {
+        with_active_isa([&](auto) {
           sim_.block_momentum_[block] = advance_velocity_scatter_momentum<Dim, S>(basis_, pv_, gv_, order, b, e, dt_);
         });
       });
@@ -501,8 +501,8 @@ class Simulation<Dim>::Step {
     } else {
       const unsigned* order = sim_.bins_.order().data();
       sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-        with_active_isa([&] {
-          const auto totals = scatter_p2g<Fields, Dim, S>(basis_, pv_, gv_, order, b, e, body_);
+        with_active_isa([&](auto isa) {
+          const auto totals = scatter_p2g<Fields, Dim, S, isa>(basis_, pv_, gv_, order, b, e, body_);
           if constexpr (Fields.momentum) sim_.block_momentum_[block] = totals;
         });
       });
@@ -516,9 +516,11 @@ class Simulation<Dim>::Step {
 
   template <GatherFields Fields>
   void gather(const char* stage) {
-    const auto stress = [&](const double* Fp, double* s) { material_.template stress<Dim>(Fp, s); };
     parallel_over(np_, particle_grain, [&](std::size_t b, std::size_t e) {
-      with_active_isa([&] { gather_g2p<Fields, Dim, S>(basis_, pv_, gv_, b, e, dt_, stress, guard_); });
+      with_active_isa([&](auto isa) {
+        const auto stress = [&](const double* Fp, double* s) { material_.template stress<Dim, isa>(Fp, s); };
+        gather_g2p<Fields, Dim, S>(basis_, pv_, gv_, b, e, dt_, stress, guard_);
+      });
     });
     const std::size_t bad = guard_.first_bad.load();
     if (bad != ParticleGuard::none) sim_.raise_unstable(bad, stage);

@@ -4,7 +4,8 @@
 // so that users who link `mpm::engine` without building it for their machine (MPM_NATIVE) get most of its speed.
 //
 // `with_active_isa(f)` runs f inlined into a function compiled for the active instruction set: `flatten` inlines
-// everything f calls (the kernels are templates and always-inline helpers). The stencil rows keep the portable
+// everything f calls (the kernels are templates and always-inline helpers). f receives the instruction set as a
+// compile-time tag (IsaTag), so that a kernel can pick the code that suits it (log_for, kernels/vector_log.hpp). The stencil rows keep the portable
 // build's width (std::experimental::simd fixes it per translation unit: two 128-bit halves), now VEX-encoded with
 // fused multiply-adds; the scalar work of the gather (F update, σ, guards) gains most (docs/PERFORMANCE.md).
 // The environment variable MPM_ISA=baseline forces the portable code (to compare the two, or to reproduce a
@@ -14,6 +15,7 @@
 #include <stdexcept>
 #include <string>
 #include <string_view>
+#include <type_traits>
 
 namespace mpm {
 
@@ -90,16 +92,29 @@ inline const char* isa_name(Isa isa) {
 #endif
 }
 
+/// The instruction set a piece of code is compiled for, as a type: f(IsaTag<I>{}) can use I in `if constexpr`.
+template <Isa I>
+using IsaTag = std::integral_constant<Isa, I>;
+
+/// Whether code compiled for instruction set I has AVX2: the AVX2 copy, or a build for an AVX2 machine.
+template <Isa I>
+inline constexpr bool has_avx2 = I == Isa::avx2_fma ||
+#if defined(__AVX2__)
+                                 true;
+#else
+                                 false;
+#endif
+
 #if MPM_ISA_DISPATCH
 namespace detail {
 template <class F>
 [[gnu::target("avx2,fma"), gnu::flatten]] void run_avx2_fma(F& f) {
-  f();
+  f(IsaTag<Isa::avx2_fma>{});
 }
 }  // namespace detail
 #endif
 
-/// Runs f() compiled for the active instruction set.
+/// Runs f(IsaTag<I>{}) compiled for the active instruction set I.
 template <class F>
 [[gnu::always_inline]] inline void with_active_isa(F&& f) {
 #if MPM_ISA_DISPATCH
@@ -108,7 +123,7 @@ template <class F>
     return;
   }
 #endif
-  f();
+  f(IsaTag<Isa::baseline>{});
 }
 
 }  // namespace mpm

@@ -10,6 +10,7 @@
 #include <cstddef>
 #include <vector>
 
+#include "kernels/isa.hpp"
 #include "kernels/stencil.hpp"
 #include "kernels/views.hpp"
 
@@ -51,8 +52,9 @@ struct NoBodyForce {
   static constexpr bool active = false;
   template <int Dim>
   std::array<double, Dim> at(std::size_t) const { return {}; }
-  /// The force at particles index[0..count) into out (a body force's batch form, used by the scatter).
-  template <int Dim>
+  /// The force at particles index[0..count) into out (a body force's batch form, used by the scatter, in code
+  /// compiled for instruction set I).
+  template <int Dim, Isa = Isa::baseline>
   void at_batch(const unsigned*, std::size_t, std::array<double, Dim>*) const {}
 };
 
@@ -156,8 +158,8 @@ MPM_INLINE void scatter_subpoint_stress(const TensorBasis<1, Axis>& basis, GridV
 }
 
 /// P2G over particles order[begin..end): adds the selected sums into the grid; returns the particle momentum of
-/// the range when momentum is scattered.
-template <ScatterFields Fields, int Dim, int S, class Axis, class Body>
+/// the range when momentum is scattered. I: the instruction set the caller is compiled for (with_active_isa).
+template <ScatterFields Fields, int Dim, int S, Isa I = Isa::baseline, class Axis, class Body>
 inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim> p,
                                        GridView<Dim> g, const unsigned* order, std::size_t begin,
                                        std::size_t end, const Body& body) {
@@ -171,7 +173,7 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
   for (std::size_t first = begin; first < end; first += batch) {
     const std::size_t last = std::min(end, first + batch);
     if constexpr (batched_body)
-      body.template at_batch<Dim>(order + first, last - first, body_at);
+      body.template at_batch<Dim, I>(order + first, last - first, body_at);
     for (std::size_t k = first; k < last; ++k) {
       const std::size_t ip = order[k];
       const auto st = stencil_of<Dim, S>(basis, basis_points<Fields.reference>(p), ip);
@@ -304,7 +306,7 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
     }
     if constexpr (Fields.deformation) {
       // σ into a local batch first, a loop without calls or stores that may alias F, which the compiler runs in
-      // vector lanes (the neo-Hookean log is vector_log); then stored, with the guard's checks
+      // vector lanes (in AVX2 code: the neo-Hookean log is then vector_log); then stored, with the guard's checks
       double s_batch[sym_components<Dim>][batch];
       for (std::size_t ip = first; ip < last; ++ip) {
         double F[Dim * Dim], s[sym_components<Dim>];

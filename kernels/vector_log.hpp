@@ -2,14 +2,18 @@
 // The natural logarithm in arithmetic the compiler can vectorise: libm's log is a call, which stops the
 // vectoriser and, inside a hot loop, spills its live vector registers. Here every branch is a bit mask, so a loop
 // over particles that takes a log runs 4 of them at once in the AVX2 copy of the kernels (kernels/isa.hpp); the
-// SSE2 code stays scalar (SSE2 has no 64-bit integer compares), without the call.
+// SSE2 code would run it scalar (SSE2 has no 64-bit integer compares), at more instructions than libm's log, so
+// kernels take their log by log_for, which picks one of the two by the instruction set they are compiled for.
 //
 // The method is fdlibm's (e_log.c): x = 2^k m with m in [√2/2, √2), f = m − 1, s = f/(2 + f), and
 // log(1 + f) = f − f²/2 + s (f²/2 + R(s²)), R a degree-14 minimax polynomial in s with its published
 // coefficients; k ln 2 is added in two parts so that the sum stays exact. It agrees with glibc's log to 1 ulp
 // (tests/test_vector_log.cpp) and returns what log returns for 0 (−∞), +∞ (+∞), negatives and NaN (NaN).
 #include <bit>
+#include <cmath>
 #include <cstdint>
+
+#include "kernels/isa.hpp"
 
 namespace mpm {
 
@@ -41,6 +45,14 @@ inline double vector_log(double x) {
   const u64 special = (zero & 0xfff0000000000000) | (plus_infinity & infinity) |
                       (~(zero | plus_infinity) & 0x7ff8000000000000);
   return std::bit_cast<double>((std::bit_cast<u64>(log_x) & finite_positive) | (special & ~finite_positive));
+}
+
+/// The log for code compiled for instruction set I: vector_log where it runs in vector lanes (AVX2), libm's log
+/// where it would run scalar (SSE2) and cost more instructions than libm's (docs/PERFORMANCE.md).
+template <Isa I>
+inline double log_for(double x) {
+  if constexpr (has_avx2<I>) return vector_log(x);
+  else return std::log(x);
 }
 
 }  // namespace mpm
