@@ -5,9 +5,10 @@
 //
 // `with_active_isa(f)` runs f inlined into a function compiled for the active instruction set: `flatten` inlines
 // everything f calls (the kernels are templates and always-inline helpers). f receives the instruction set as a
-// compile-time tag (IsaTag), so that a kernel can pick the code that suits it (log_for, kernels/vector_log.hpp). The stencil rows keep the portable
-// build's width (std::experimental::simd fixes it per translation unit: two 128-bit halves), now VEX-encoded with
-// fused multiply-adds; the scalar work of the gather (F update, σ, guards) gains most (docs/PERFORMANCE.md).
+// compile-time tag (IsaTag), so that a kernel can pick the code that suits it (log_for, kernels/vector_log.hpp).
+// The stencil rows keep the portable build's width (std::experimental::simd fixes it per translation unit: two
+// 128-bit halves), now VEX-encoded with fused multiply-adds; the scalar work of the gather (F update, σ, guards)
+// gains most (docs/PERFORMANCE.md).
 // The environment variable MPM_ISA=baseline forces the portable code (to compare the two, or to reproduce a
 // baseline CPU's round-off bit for bit); MPM_ISA=avx2 or auto (the default) take the best the CPU supports. The
 // copies differ in round-off only: the AVX2 code fuses multiply-adds.
