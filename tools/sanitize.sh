@@ -114,8 +114,13 @@ run_tsan() {
     -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1" -DMPM_SANITIZE=thread \
     -DCMAKE_C_COMPILER="$clang" -DCMAKE_CXX_COMPILER="$clangxx" \
     -DTBB_DIR="$tbb/lib/cmake/TBB" "-DMPM_TEST_SPEC=[parallel]" || return 1
+  # CMake links with a RUNPATH, which yields to LD_LIBRARY_PATH: a caller's LD_LIBRARY_PATH naming the directory of
+  # Debian's libtbb loads the uninstrumented library, so the instrumented one's directory goes first
+  local -x LD_LIBRARY_PATH="$tbb/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
   if ! ldd "$root/build-tsan/tests/mpm_tests" | grep -q "$tbb/lib/libtbb"; then
-    log "tsan: mpm_tests does not load the instrumented libtbb from $tbb"; return 1
+    log "tsan: mpm_tests does not load the instrumented libtbb from $tbb:"
+    ldd "$root/build-tsan/tests/mpm_tests" | grep -i tbb >&2
+    return 1
   fi
   local supp="$root/tools/tsan.supp"
   local tests
