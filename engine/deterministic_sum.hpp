@@ -1,5 +1,6 @@
 #pragma once
 // The engine's reductions: sums whose results do not depend on the thread count.
+#include <algorithm>
 #include <array>
 #include <cstddef>
 
@@ -40,6 +41,17 @@ std::array<double, K> deterministic_sums(std::size_t n, F&& f) {
   std::array<double, K> out;
   for (std::size_t k = 0; k < K; ++k) out[k] = total[k].value();
   return out;
+}
+
+/// deterministic_sums over [0, n) in fixed batches of `batch` indices: f(first, count) returns the K sums of the
+/// indices [first, first + count). A batch lets f form what its terms share once for all of them (a body force's
+/// coefficients, an exact solution's functions of time) and evaluate the rest in vector lanes.
+template <std::size_t K, class F>
+std::array<double, K> deterministic_batch_sums(std::size_t n, std::size_t batch, F&& f) {
+  return deterministic_sums<K>((n + batch - 1) / batch, [&](std::size_t k) {
+    const std::size_t first = k * batch;
+    return f(first, std::min(batch, n - first));
+  });
 }
 
 /// Deterministic parallel sum of f(i) over [0, n) (deterministic_sums of one component).

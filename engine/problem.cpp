@@ -26,6 +26,16 @@ ExactState<Dim> Problem<Dim>::exact(const std::array<double, Dim>&, double) cons
   throw std::logic_error("this problem has no exact solution");
 }
 
+template <int Dim>
+void Problem<Dim>::exact_batch(double t, std::array<const double*, Dim> X, std::size_t first, std::size_t count,
+                               ExactState<Dim>* out) const {
+  for (std::size_t j = 0; j < count; ++j) {
+    std::array<double, Dim> Xp;
+    for (int d = 0; d < Dim; ++d) Xp[d] = X[d][first + j];
+    out[j] = exact(Xp, t);
+  }
+}
+
 namespace {
 
 ExactState<1> exact_1d(const Fields1d& f) {
@@ -82,18 +92,27 @@ class VibratingPlate final : public Problem<2> {
   }
   bool has_exact() const override { return true; }
   ExactState<2> exact(const std::array<double, 2>& X, double t) const override {
-    const double wt = c_ * pi * t / L_;
-    const auto [sx, cx] = trig_(X[0]);
-    const auto [sy, cy] = trig_(X[1]);
     ExactState<2> e;
-    e.u = {A_ * sx * std::sin(wt), A_ * sy * std::sin(wt + pi)};
-    e.v = {A_ * c_ * pi / L_ * sx * std::cos(wt), A_ * c_ * pi / L_ * sy * std::cos(wt + pi)};
-    const double F11 = 1 + (2 * pi * A_ / L_) * cx * std::sin(wt);
-    const double F22 = 1 + (2 * pi * A_ / L_) * cy * std::sin(wt + pi);
-    const double J = F11 * F22, lnJ = std::log(J);
-    e.sigma = {(k_.lambda * lnJ + k_.mu * (F11 * F11 - 1)) / J, 0.0, 0.0,
-               (k_.lambda * lnJ + k_.mu * (F22 * F22 - 1)) / J};
+    exact_batch(t, {&X[0], &X[1]}, 0, 1, &e);
     return e;
+  }
+  void exact_batch(double t, std::array<const double*, 2> X, std::size_t first, std::size_t count,
+                   ExactState<2>* out) const override {
+    const double wt = c_ * pi * t / L_;
+    const double sin_t[2] = {std::sin(wt), std::sin(wt + pi)}, cos_t[2] = {std::cos(wt), std::cos(wt + pi)};
+    for (std::size_t j = 0; j < count; ++j) {
+      ExactState<2>& e = out[j];
+      double F[2];  // the diagonal of F
+      for (int d = 0; d < 2; ++d) {
+        const auto [s, c] = trig_(X[d][first + j]);
+        e.u[d] = A_ * s * sin_t[d];
+        e.v[d] = A_ * c_ * pi / L_ * s * cos_t[d];
+        F[d] = 1 + (2 * pi * A_ / L_) * c * sin_t[d];
+      }
+      const double J = F[0] * F[1], lnJ = std::log(J);
+      e.sigma = {(k_.lambda * lnJ + k_.mu * (F[0] * F[0] - 1)) / J, 0.0, 0.0,
+                 (k_.lambda * lnJ + k_.mu * (F[1] * F[1] - 1)) / J};
+    }
   }
 
  private:

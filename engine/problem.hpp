@@ -138,6 +138,10 @@ class Problem {
                                                   bool reference = false) const;
   virtual bool has_exact() const { return false; }
   virtual ExactState<Dim> exact(const std::array<double, Dim>& X, double t) const;
+  /// out[j] = exact(X at particle first + j, t) for j < count; `X` the reference columns. A batch lets a problem
+  /// form what depends on t alone once for all of it (the plate's sines and cosines of ωt), not once per particle.
+  virtual void exact_batch(double t, std::array<const double*, Dim> X, std::size_t first, std::size_t count,
+                           ExactState<Dim>* out) const;
 };
 
 /// The problem a scene describes: a built-in one by name, or the scene's own bodies, gravity and sides.

@@ -1,5 +1,6 @@
-// The table-and-series sine of manufactured body forces (engine/periodic_sine.hpp), and the plate's body force it
-// feeds, checked against the exact solution it was manufactured from.
+// The table-and-series sine of manufactured solutions (engine/periodic_sine.hpp); the plate's body force it feeds,
+// checked against the exact solution it was manufactured from; and the batched sums that evaluate the force and the
+// exact solution (the energy guard's power, the errors) against plain sums particle by particle.
 #include <catch2/catch.hpp>
 
 #include <cmath>
@@ -8,6 +9,7 @@
 
 #include "engine/periodic_sine.hpp"
 #include "engine/problem.hpp"
+#include "engine/simulation.hpp"
 #include "scene_builders.hpp"
 
 using namespace mpm;
@@ -82,7 +84,7 @@ TEST_CASE("the plate's body force balances its exact solution", "[body-force]") 
 }
 
 TEST_CASE("the plate's body force for a batch of particles equals it particle by particle", "[body-force]") {
-  // the scatter asks for batches (at_batch), the energy balance and the TLS right-hand side for one particle (at)
+  // the scatter and the energy balance ask for batches (at_batch), the TLS right-hand side for one particle (at)
   const Scene scene = parse_scene(test::plate_scene(8, 0.05));
   const auto problem = make_problem<2>(scene);
   std::mt19937_64 rng(5);
@@ -106,5 +108,65 @@ TEST_CASE("the plate's body force for a batch of particles equals it particle by
       CHECK(batch[j][0] == single[0]);
       CHECK(batch[j][1] == single[1]);
     }
+  }
+}
+
+TEST_CASE("the body forces' power of a plate run equals its sum particle by particle", "[body-force]") {
+  // Simulation::external_power takes the force in batches (at_batch, the active instruction set's log); here the
+  // plain sum of m_p b_p·v_p with the force of one particle at a time (at, libm's log)
+  const Scene scene = parse_scene(test::plate_scene(8, 0.05));
+  Simulation<2> sim(scene);
+  for (int n = 0; n < 5; ++n) sim.step();  // the plate starts at rest: its velocities grow from zero
+  const auto& s = sim.particles();
+  const auto problem = make_problem<2>(scene);
+  const BodyForce<2> force =
+      problem->body_force(sim.time(), {s.column(Field::reference, 0).data(), s.column(Field::reference, 1).data()});
+  const auto& plate = std::get<PlateBodyForce>(force);
+  long double sum = 0, scale = 0;
+  for (std::size_t p = 0; p < s.size(); ++p) {
+    const auto b = plate.at<2>(p);
+    for (int d = 0; d < 2; ++d) {
+      const long double term = s.column(Field::mass)[p] * b[d] * s.column(Field::velocity, d)[p];
+      sum += term;
+      scale += std::abs(term);
+    }
+  }
+  INFO("power " << sim.external_power() << " W, particle by particle " << static_cast<double>(sum) << " W");
+  REQUIRE(scale > 0);
+  CHECK(std::abs(sim.external_power() - static_cast<double>(sum)) <= 1e-13 * static_cast<double>(scale));
+}
+
+TEST_CASE("a plate run's errors equal their sums particle by particle", "[body-force]") {
+  // particle_errors takes the exact solution in batches (Problem::exact_batch, the plate's sines of ωt formed once
+  // per batch); here the plain sums with the exact solution at one particle at a time. The staggered start compares
+  // the velocities at another time than the rest (velocity_time), which a batch evaluates separately.
+  for (const char* start : {"collocated", "staggered"}) {
+    nlohmann::json j = test::plate_scene(8, 0.05);
+    j["time"]["start"] = start;
+    const Scene scene = parse_scene(j);
+    Simulation<2> sim(scene);
+    for (int n = 0; n < 5; ++n) sim.step();
+    const auto& s = sim.particles();
+    const auto problem = make_problem<2>(scene);
+    const double t = sim.time(), t_v = velocity_time(scene.time.start, sim.steps_done(), t, sim.dt());
+    long double eu = 0, ev = 0, es = 0;
+    for (std::size_t p = 0; p < s.size(); ++p) {
+      const std::array<double, 2> X{s.column(Field::reference, 0)[p], s.column(Field::reference, 1)[p]};
+      const ExactState<2> ex = problem->exact(X, t), ex_v = problem->exact(X, t_v);
+      for (int d = 0; d < 2; ++d) {
+        eu += std::pow(s.column(Field::position, d)[p] - X[d] - ex.u[d], 2);
+        ev += std::pow(s.column(Field::velocity, d)[p] - ex_v.v[d], 2);
+      }
+      for (int a = 0; a < 2; ++a)
+        for (int b = 0; b < 2; ++b)
+          es += std::pow(s.column(Field::stress, sym_index<2>(a, b))[p] - ex.sigma[a * 2 + b], 2);
+    }
+    const RunErrors e = sim.errors();
+    const auto rms = [&](long double sum) { return static_cast<double>(std::sqrt(sum / s.size())); };
+    INFO(start << ": u RMS " << e.displacement_rms << " against " << rms(eu) << ", v RMS " << e.velocity_rms
+               << " against " << rms(ev) << ", σ RMS " << e.stress_rms << " against " << rms(es));
+    CHECK(e.displacement_rms == Approx(rms(eu)).epsilon(1e-13));
+    CHECK(e.velocity_rms == Approx(rms(ev)).epsilon(1e-13));
+    CHECK(e.stress_rms == Approx(rms(es)).epsilon(1e-13));
   }
 }
