@@ -241,7 +241,7 @@ CriticalStep critical_step_of(const ParticleStore<Dim>& s, const Material& mater
 
 /// Power of the body forces on the particles, Σ_p m_p b_p(t)·v_p, W; `X` the reference columns (null if absent).
 /// The force comes a batch of particles at a time (at_batch, in the active instruction set), as in the scatter:
-/// particle by particle (at), the energy guard's power took 14 % of the time of a short plate run.
+/// particle by particle (at, with libm's log) the plate's power took twice the instructions (docs/PERFORMANCE.md).
 template <int Dim>
 double body_force_power(const ParticleStore<Dim>& s, const Problem<Dim>& problem, double t,
                         std::array<const double*, Dim> X) {

@@ -116,7 +116,7 @@ TEST_CASE("the body forces' power of a plate run equals its sum particle by part
   // plain sum of m_p b_p·v_p with the force of one particle at a time (at, libm's log)
   const Scene scene = parse_scene(test::plate_scene(8, 0.05));
   Simulation<2> sim(scene);
-  for (int n = 0; n < 5; ++n) sim.step();  // the plate starts at rest: its velocities grow from zero
+  for (int n = 0; n < 5; ++n) sim.step();  // the velocities of the run, not only the exact initial ones
   const auto& s = sim.particles();
   const auto problem = make_problem<2>(scene);
   const BodyForce<2> force =
