@@ -247,6 +247,8 @@ double body_force_power(const ParticleStore<Dim>& s, const Problem<Dim>& problem
                         std::array<const double*, Dim> X) {
   if (!problem.has_body_force()) return 0.0;
   const auto m = s.column(Field::mass);
+  std::array<std::span<const double>, Dim> v;
+  for (int d = 0; d < Dim; ++d) v[d] = s.column(Field::velocity, d);
   return std::visit(
       [&](const auto& force) {
         if constexpr (!std::decay_t<decltype(force)>::active) {
@@ -260,7 +262,7 @@ double body_force_power(const ParticleStore<Dim>& s, const Problem<Dim>& problem
             std::array<double, 1> power{};
             for (std::size_t j = 0; j < count; ++j)
               for (int d = 0; d < Dim; ++d)
-                power[0] += m[first + j] * b[j][d] * s.column(Field::velocity, d)[first + j];
+                power[0] += m[first + j] * b[j][d] * v[d][first + j];
             return power;
           })[0];
         }
