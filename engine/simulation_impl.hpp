@@ -519,7 +519,7 @@ class Simulation<Dim>::Step {
     parallel_over(np_, particle_grain, [&](std::size_t b, std::size_t e) {
       with_active_isa([&](auto isa) {
         const auto stress = [&](const double* Fp, double* s) { material_.template stress<Dim, isa>(Fp, s); };
-        gather_g2p<Fields, Dim, S>(basis_, pv_, gv_, b, e, dt_, stress, guard_);
+        gather_g2p<Fields, Dim, S, isa>(basis_, pv_, gv_, b, e, dt_, stress, guard_);
       });
     });
     const std::size_t bad = guard_.first_bad.load();

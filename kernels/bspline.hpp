@@ -129,9 +129,10 @@ struct UniformCell {
   double xi;
 };
 [[gnu::always_inline]] inline UniformCell uniform_cell(double x, double inv_h, int cells) {
-  // floor(s) without the libm call (s ≤ 0, and NaN, give cell 0)
+  // floor(s) without the libm call, s clamped to [0, cells − 1] first (NaN gives cell 0); no branch, so that a loop
+  // over particles runs in vector lanes (gather_sums_in_lanes)
   const double s = x * inv_h;
-  const int c = s > 0.0 ? std::min(static_cast<int>(std::min(s, double(cells))), cells - 1) : 0;
+  const int c = static_cast<int>(std::min(cells - 0.5, std::max(0.0, s)));
   return {c, s - c};
 }
 

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <concepts>
+#include <type_traits>
 #include <cstddef>
 #include <vector>
 
@@ -246,38 +247,162 @@ inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<D
   return totals;
 }
 
+/// The sums a gather forms at a batch of particles, from which it updates them: Σ_i φ_i a_i, Σ_i φ_i v_i and
+/// ∇v = Σ_i v_i ⊗ ∇φ_i (row-major), per particle of the batch.
+template <int Dim, std::size_t N>
+struct GatherSums {
+  double a[Dim][N], v[Dim][N], grad_v[Dim * Dim][N];
+};
+
+/// The gather's sums at particles [first, first + n) by stencil rows: φ_i = wx_i wy_j, so the grid rows are summed
+/// weighted by wy_j (and dwy_j) first, and contracted with wx or dwx once.
+template <GatherFields Fields, int Dim, int S, class Axis, std::size_t N>
+MPM_INLINE void gather_sums_by_rows(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim> p, GridView<Dim> g,
+                                    std::size_t first, std::size_t n, GatherSums<Dim, N>& sums) {
+  for (std::size_t k = 0; k < n; ++k) {
+    const auto st = stencil_of<Dim, S>(basis, basis_points<Fields.reference>(p), first + k);
+    RowVector<S> a_y[Dim] = {}, v_y[Dim] = {}, v_dy[Dim] = {};
+    for_each_row(st, g.stride1, [&](int row, double wy, double dwy) MPM_INLINE_LAMBDA {
+      for (int d = 0; d < Dim; ++d) {
+        if constexpr (Fields.velocity) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
+        if constexpr (Fields.position || Fields.deformation) {
+          const auto vi = load_row<RowVector<S>>(g.v[d] + row);
+          v_y[d] += wy * vi;
+          if constexpr (Fields.deformation && Dim == 2) v_dy[d] += dwy * vi;
+        }
+      }
+    });
+    for (int d = 0; d < Dim; ++d) {
+      if constexpr (Fields.velocity) sums.a[d][k] = reduce(st.wx * a_y[d]);
+      if constexpr (Fields.position) sums.v[d][k] = reduce(st.wx * v_y[d]);
+      if constexpr (Fields.deformation) {
+        sums.grad_v[d * Dim][k] = reduce(st.dwx * v_y[d]);
+        if constexpr (Dim == 2) sums.grad_v[d * Dim + 1][k] = reduce(st.wx * v_dy[d]);
+      }
+    }
+  }
+}
+
+namespace detail {
+/// UniformAxis<3>'s coefficient table as its interior row plus the changes for the first cell, the last cell and
+/// a grid of one cell (the last is zero for quadratics): a particle's row of the table is then arithmetic on two
+/// flags, which runs in vector lanes, where a lookup by span class would be a gather per coefficient. Exact: the
+/// entries are multiples of 1/2.
+inline constexpr auto uniform3_rows = [] {
+  constexpr auto& t = UniformAxis<3>::coefficients;
+  std::array<std::array<std::array<double, 3>, 3>, 4> r{};
+  for (int power = 0; power < 3; ++power)
+    for (int k = 0; k < 3; ++k) {
+      r[0][power][k] = t[0][power][k];
+      r[1][power][k] = t[1][power][k] - t[0][power][k];
+      r[2][power][k] = t[2][power][k] - t[0][power][k];
+      r[3][power][k] = t[3][power][k] - t[1][power][k] - t[2][power][k] + t[0][power][k];
+    }
+  return r;
+}();
+}  // namespace detail
+
+/// The gather's sums at particles [first, first + n) of a 2D grid with the fast path's quadratic B-splines, a
+/// particle per vector lane: one loop without calls or branches over the unit-stride particle columns, reading the
+/// 9 nodes of each lane by index, which GCC vectorises in code with AVX2 (it needs -fno-trapping-math to evaluate
+/// both sides of a selection, kernels/CMakeLists.txt). Per particle, the arithmetic of UniformAxis::operator() and
+/// of gather_sums_by_rows, the sums over the nodes in another order. The loops over the stencil are unrolled by
+/// pragma: the vectoriser takes only a loop with no loop inside.
+template <GatherFields Fields, std::size_t N>
+MPM_INLINE void gather_sums_in_lanes(const TensorBasis<2, UniformAxis<3>>& basis, ParticleView<2> p, GridView<2> g,
+                                     std::size_t first, std::size_t n, GatherSums<2, N>& sums) {
+  constexpr auto& rows = detail::uniform3_rows;
+  const auto x = basis_points<Fields.reference>(p);
+  const int stride = g.stride1;
+  for (std::size_t k = 0; k < n; ++k) {
+    double w[2][3], dw[2][3];  // per axis: φ and dφ/dx of the 3 functions
+    int node0 = 0;             // the stencil's first node
+#pragma GCC unroll 2
+    for (int d = 0; d < 2; ++d) {
+      const UniformAxis<3>& axis = basis.axis[d];
+      const UniformCell at = uniform_cell(x[d][first + k], axis.inv_h, axis.cells);
+      const double first_cell = at.cell == 0, last_cell = at.cell == axis.cells - 1;
+#pragma GCC unroll 3
+      for (int i = 0; i < 3; ++i) {
+        double q[3];
+#pragma GCC unroll 3
+        for (int power = 0; power < 3; ++power)
+          q[power] = rows[0][power][i] + first_cell * rows[1][power][i] + last_cell * rows[2][power][i] +
+                     (first_cell * last_cell) * rows[3][power][i];
+        w[d][i] = q[0] + at.xi * (q[1] + at.xi * q[2]);
+        dw[d][i] = (q[1] + (2.0 * at.xi) * q[2]) * axis.inv_h;
+      }
+      node0 += d == 0 ? at.cell : at.cell * stride;
+    }
+    // as the rows: sums along axis 1 (wy_j, and dwy_j for ∂₁) per node of axis 0, then contracted with wx or dwx
+    double a_y[2][3] = {}, v_y[2][3] = {}, v_dy[2][3] = {};
+#pragma GCC unroll 3
+    for (int j = 0; j < 3; ++j)
+#pragma GCC unroll 3
+      for (int i = 0; i < 3; ++i) {
+        const int node = node0 + j * stride + i;
+#pragma GCC unroll 2
+        for (int d = 0; d < 2; ++d) {
+          if constexpr (Fields.velocity) a_y[d][i] += w[1][j] * g.a[d][node];
+          if constexpr (Fields.position || Fields.deformation) {
+            const double vi = g.v[d][node];
+            v_y[d][i] += w[1][j] * vi;
+            if constexpr (Fields.deformation) v_dy[d][i] += dw[1][j] * vi;
+          }
+        }
+      }
+#pragma GCC unroll 2
+    for (int d = 0; d < 2; ++d) {
+      double a = 0.0, v = 0.0, dv0 = 0.0, dv1 = 0.0;
+#pragma GCC unroll 3
+      for (int i = 0; i < 3; ++i) {
+        a += w[0][i] * a_y[d][i];
+        v += w[0][i] * v_y[d][i];
+        dv0 += dw[0][i] * v_y[d][i];
+        dv1 += w[0][i] * v_dy[d][i];
+      }
+      if constexpr (Fields.velocity) sums.a[d][k] = a;
+      if constexpr (Fields.position) sums.v[d][k] = v;
+      if constexpr (Fields.deformation) {
+        sums.grad_v[2 * d][k] = dv0;
+        sums.grad_v[2 * d + 1][k] = dv1;
+      }
+    }
+  }
+}
+
+/// Whether a gather runs its particles in vector lanes (gather_sums_in_lanes) in code for instruction set I: 2D
+/// fast-path quadratics, in code with AVX2 (where they were measured, docs/PERFORMANCE.md); elsewhere the rows.
+template <Isa I, int Dim, class Axis>
+inline constexpr bool gathers_in_lanes = has_avx2<I> && Dim == 2 && std::is_same_v<Axis, UniformAxis<3>>;
+
 /// G2P over particles [begin, end): the selected updates; `stress(F, s)` is the constitutive law (σ from F).
-template <GatherFields Fields, int Dim, int S, class Axis, class Stress>
+/// I: the instruction set the caller is compiled for (with_active_isa).
+template <GatherFields Fields, int Dim, int S, Isa I = Isa::baseline, class Axis, class Stress>
 MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim> p, GridView<Dim> g,
                            std::size_t begin, std::size_t end, double dt, const Stress& stress,
                            ParticleGuard& guard) {
   const std::array<double, 3> hi = guard.hi, inv_h = guard.inv_h;  // copies, as the views (views.hpp)
   double max_move = 0.0;  // cells
-  // σ(F) in a second loop over a batch of particles: the constitutive law takes a log, and around a call inside the
-  // gather loop every live vector register of the gather was spilled and reloaded (caller-saved in the x86-64 ABI)
+  // per batch of particles, three loops: the sums over the stencils, the updates, and σ(F). The sums into a local
+  // batch: a loop that stores nothing the grid or the particle columns could alias may run in vector lanes. σ in a
+  // loop of its own: the constitutive law takes a log, and around a call inside the gather loop every live vector
+  // register of the gather was spilled and reloaded (caller-saved in the x86-64 ABI)
   constexpr std::size_t batch = 64;
+  GatherSums<Dim, batch> sums;
   for (std::size_t first = begin; first < end; first += batch) {
     const std::size_t last = std::min(end, first + batch);
+    if constexpr (gathers_in_lanes<I, Dim, Axis>)
+      gather_sums_in_lanes<Fields>(basis, p, g, first, last - first, sums);
+    else
+      gather_sums_by_rows<Fields, Dim, S>(basis, p, g, first, last - first, sums);
     for (std::size_t ip = first; ip < last; ++ip) {
-      const auto st = stencil_of<Dim, S>(basis, basis_points<Fields.reference>(p), ip);
-      // φ_i = wx_i wy_j: contract the rows along axis 1 first (a_y = Σ_j wy_j a_ij, and with dwy_j for ∂₁), then
-      // along axis 0 with wx or dwx; ∇v_p = Σ v_i ⊗ ∇φ_i is stored row-major
-      RowVector<S> a_y[Dim] = {}, v_y[Dim] = {}, v_dy[Dim] = {};
-      for_each_row(st, g.stride1, [&](int row, double wy, double dwy) MPM_INLINE_LAMBDA {
-        for (int d = 0; d < Dim; ++d) {
-          if constexpr (Fields.velocity) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
-          if constexpr (Fields.position || Fields.deformation) {
-            const auto vi = load_row<RowVector<S>>(g.v[d] + row);
-            v_y[d] += wy * vi;
-            if constexpr (Fields.deformation && Dim == 2) v_dy[d] += dwy * vi;
-          }
-        }
-      });
+      const std::size_t k = ip - first;
       if constexpr (Fields.velocity)
-        for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * reduce(st.wx * a_y[d]);
+        for (int d = 0; d < Dim; ++d) p.v[d][ip] += dt * sums.a[d][k];
       if constexpr (Fields.position)
         for (int d = 0; d < Dim; ++d) {
-          const double dx = dt * reduce(st.wx * v_y[d]);
+          const double dx = dt * sums.v[d][k];
           p.x[d][ip] += dx;
           if constexpr (Fields.velocity_from_position) p.v[d][ip] = dx / dt;
           max_move = std::max(max_move, std::abs(dx) * inv_h[d]);
@@ -285,17 +410,12 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
       if constexpr (Fields.deformation) {
         double F[Dim * Dim], Fn[Dim * Dim];
         for (int c = 0; c < Dim * Dim; ++c) F[c] = p.F[c][ip];
-        double L[Dim * Dim];
-        for (int d = 0; d < Dim; ++d) {
-          L[d * Dim] = reduce(st.dwx * v_y[d]);
-          if constexpr (Dim == 2) L[d * Dim + 1] = reduce(st.wx * v_dy[d]);
-        }
         for (int a = 0; a < Dim; ++a)
           for (int b = 0; b < Dim; ++b) {
             double sum = F[a * Dim + b];
-            if constexpr (Fields.reference) sum += dt * L[a * Dim + b];  // L = Σ v_i ⊗ ∇_X φ_i
+            if constexpr (Fields.reference) sum += dt * sums.grad_v[a * Dim + b][k];  // ∇_X v = Σ v_i ⊗ ∇_X φ_i
             else
-              for (int c = 0; c < Dim; ++c) sum += dt * L[a * Dim + c] * F[c * Dim + b];
+              for (int c = 0; c < Dim; ++c) sum += dt * sums.grad_v[a * Dim + c][k] * F[c * Dim + b];
             Fn[a * Dim + b] = sum;
           }
         for (int c = 0; c < Dim * Dim; ++c) p.F[c][ip] = Fn[c];
