@@ -129,8 +129,9 @@ struct UniformCell {
   double xi;
 };
 [[gnu::always_inline]] inline UniformCell uniform_cell(double x, double inv_h, int cells) {
-  // floor(s) without the libm call, s clamped to [0, cells − 1] first (NaN gives cell 0); no branch, so that a loop
-  // over particles runs in vector lanes (gather_sums_in_lanes)
+  // floor(s) without the libm call, s clamped to [0, cells − ½] first, so the truncation gives a cell in
+  // [0, cells − 1] (NaN gives 0). No branch, so that a loop over particles runs in vector lanes
+  // (gather_sums_in_lanes); with cells − 1 as the bound GCC branched to skip the truncation of a known integer
   const double s = x * inv_h;
   const int c = static_cast<int>(std::min(cells - 0.5, std::max(0.0, s)));
   return {c, s - c};

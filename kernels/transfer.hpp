@@ -7,8 +7,8 @@
 #include <array>
 #include <cmath>
 #include <concepts>
-#include <type_traits>
 #include <cstddef>
+#include <type_traits>
 #include <vector>
 
 #include "kernels/isa.hpp"
