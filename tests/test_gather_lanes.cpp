@@ -56,8 +56,22 @@ struct GatherCase {
 
   void add_particle(double x, double y, std::mt19937& random) {
     std::uniform_real_distribution<double> unit(-1.0, 1.0);
-    const double values[15] = {x,         y,         x * 0.9,   y * 1.1,   unit(random), unit(random), 1 + 0.1 * unit(random),
-                               0.1 * unit(random), 0.1 * unit(random), 1 + 0.1 * unit(random), 0, 0, 0, 1, 1};
+    // (a braced list is evaluated left to right)
+    const double values[15] = {x,
+                               y,
+                               x * 0.9,
+                               y * 1.1,
+                               unit(random),
+                               unit(random),
+                               1 + 0.1 * unit(random),
+                               0.1 * unit(random),
+                               0.1 * unit(random),
+                               1 + 0.1 * unit(random),
+                               0,
+                               0,
+                               0,
+                               1,
+                               1};
     for (int c = 0; c < 15; ++c) columns[c].push_back(values[c]);
     ++count;
   }
