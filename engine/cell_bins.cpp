@@ -83,7 +83,7 @@ std::vector<unsigned> CellBins<Dim>::cells_by_block() const {
 }
 
 template <int Dim>
-void CellBins<Dim>::bin(const std::array<const double*, Dim>& x, std::size_t count) {
+void CellBins<Dim>::bin(const std::array<const double*, Dim>& x, std::size_t count, bool cells_in_block) {
   const std::size_t nb = blocks();
   const std::size_t chunks = chunks_for(count), chunk_size = (count + chunks - 1) / chunks;
   key_.resize(count);
@@ -95,10 +95,7 @@ void CellBins<Dim>::bin(const std::array<const double*, Dim>& x, std::size_t cou
     const std::size_t end = std::min(count, (c + 1) * chunk_size);
     for (std::size_t p = c * chunk_size; p < end; ++p) {
       unsigned block = 0;
-      for (int d = 0; d < Dim; ++d) {
-        const int cell = std::clamp(static_cast<int>(std::floor(x[d][p] * inv_h_[d])), 0, cells_[d] - 1);
-        block += block_part_[d][cell];
-      }
+      for (int d = 0; d < Dim; ++d) block += block_part_[d][cell_of(x[d][p], d)];
       const unsigned k = rank_[block];
       key_[p] = k;
       ++cnt[k];
@@ -122,6 +119,32 @@ void CellBins<Dim>::bin(const std::array<const double*, Dim>& x, std::size_t cou
     const std::size_t end = std::min(count, (c + 1) * chunk_size);
     for (std::size_t p = c * chunk_size; p < end; ++p) order_[off[key_[p]]++] = static_cast<unsigned>(p);
   });
+  if (cells_in_block) sort_cells_in_blocks(x);
+}
+
+template <int Dim>
+void CellBins<Dim>::sort_cells_in_blocks(const std::array<const double*, Dim>& x) {
+  std::size_t cells_per_block = 1;
+  for (int d = 0; d < Dim; ++d) cells_per_block *= block_width_;
+  sorted_.resize(order_.size());
+  // key_ (free after the block sort) holds the cell in its block of each position of order_
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks(), 16), [&](const tbb::blocked_range<std::size_t>& r) {
+    std::vector<unsigned> start(cells_per_block + 1);
+    for (std::size_t b = r.begin(); b < r.end(); ++b) {
+      std::fill(start.begin(), start.end(), 0u);
+      for (std::size_t k = block_begin_[b]; k < block_begin_[b + 1]; ++k) {
+        unsigned local = 0;
+        for (int d = Dim - 1; d >= 0; --d)
+          local = local * block_width_ + static_cast<unsigned>(cell_of(x[d][order_[k]], d) % block_width_);
+        key_[k] = local;
+        ++start[local + 1];
+      }
+      for (std::size_t c = 0; c < cells_per_block; ++c) start[c + 1] += start[c];
+      for (std::size_t k = block_begin_[b]; k < block_begin_[b + 1]; ++k)
+        sorted_[block_begin_[b] + start[key_[k]]++] = order_[k];
+    }
+  });
+  order_.swap(sorted_);
 }
 
 template class CellBins<1>;

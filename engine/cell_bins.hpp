@@ -7,6 +7,7 @@
 // identical for any thread count.
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <span>
 #include <stdexcept>
@@ -38,9 +39,11 @@ class CellBins {
   /// own order(), whose cells it met in another order.) Such bins have no colour classes: no coloured loops.
   static CellBins single_cells_in_order_of(const CellBins& layout);
 
-  /// Stable counting sort of the particles by block, colour-major. Positions outside the grid are binned into
-  /// the nearest cell (the run's guards report them).
-  void bin(const std::array<const double*, Dim>& x, std::size_t count);
+  /// Stable counting sort of the particles by block, colour-major; with `cells_in_block`, by cell within each block
+  /// as well (row-major), so that the particles of a cell are contiguous in order(): the scatter by cell moments
+  /// (kernels/cell_moments.hpp) sums each cell's particles before it touches the grid. Positions outside the grid
+  /// are binned into the nearest cell (the run's guards report them).
+  void bin(const std::array<const double*, Dim>& x, std::size_t count, bool cells_in_block = false);
 
   /// After the caller permuted the particles into order(): the order becomes the identity, block ranges stay.
   void adopt_order() {
@@ -129,12 +132,19 @@ class CellBins {
   /// A table, not a division: the integer divisions by the run-time block width were most of the time of the
   /// binning's first pass, which the single-cell bins of a reconstruction run every step.
   std::array<std::vector<unsigned>, Dim> block_part_;
+  /// The cell of position x along axis d, clamped to the grid.
+  int cell_of(double x, int d) const {
+    return std::clamp(static_cast<int>(std::floor(x * inv_h_[d])), 0, cells_[d] - 1);
+  }
+  /// Stable counting sort of each block's range of order() by the particles' cells in the block (row-major).
+  void sort_cells_in_blocks(const std::array<const double*, Dim>& x);
   std::vector<unsigned> rank_;          ///< colour-major rank of each block (row-major block index)
   std::vector<unsigned> block_of_rank_;  ///< the inverse: row-major index of the block of each rank
   std::array<std::size_t, (1 << Dim) + 1> colour_begin_{};
   std::vector<std::size_t> block_begin_;  ///< by rank, size blocks+1
   std::vector<unsigned> key_;           ///< block rank per particle
   std::vector<unsigned> order_;
+  std::vector<unsigned> sorted_;        ///< sort_cells_in_blocks' output, swapped with order_
   std::vector<unsigned> counts_;        ///< per chunk and rank (particle indices fit: order_ holds them)
   bool coloured_ = true;                ///< ranks are colour-major (false: single_cells_in_order_of)
 };

@@ -310,7 +310,7 @@ void Simulation<Dim>::step() {
   if (next_step_bins()) {
     std::array<const double*, Dim> x;
     for (int d = 0; d < Dim; ++d) x[d] = store_.column(basis_field(), d).data();
-    bins_.bin(x, store_.size());
+    bins_.bin(x, store_.size(), reorder);  // the reordered columns hold each cell's particles together
     moved_cells_ = 0.0;
   }
   if (reorder) {
