@@ -67,7 +67,8 @@ class CellMomentScatter {
   /// Adds the moments of the current cell to the grid (none before the first particle).
   MPM_INLINE void finish() {
     if (cell0_ < 0) return;
-    const UniformAxis<3>&ax = basis_.axis[0], &ay = basis_.axis[1];
+    const UniformAxis<3>& ax = basis_.axis[0];
+    const UniformAxis<3>& ay = basis_.axis[1];
     // axis 0: coefficient rows over the functions a, by power of ξ, of wx and of −wx' = −(qx[1] + 2ξ qx[2]) / h
     const auto& q = detail::padded_uniform<3>[ax.span_class(cell0_)];
     Lanes wx[3];
