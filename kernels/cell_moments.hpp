@@ -27,10 +27,10 @@ struct MomentScalars {
 /// translation unit's (two SSE2 registers in a portable build); plain arrays GCC did not vectorise at all.
 using MomentLanes = double __attribute__((vector_size(4 * sizeof(double))));
 
-/// r += (lane k of m) x: lane k broadcast by one vpermpd with AVX2.
-MPM_INLINE void add_lane_times(MomentLanes& r, const MomentLanes& m, int k, const MomentLanes& x) {
-  using Mask = long long __attribute__((vector_size(4 * sizeof(long long))));
-  r += __builtin_shuffle(m, Mask{k, k, k, k}) * x;
+/// r += (lane k of m) x: lane k broadcast by one vpermpd with AVX2 (__builtin_shufflevector: GCC ≥ 12 and clang).
+template <int k>
+MPM_INLINE void add_lane_times(MomentLanes& r, const MomentLanes& m, const MomentLanes& x) {
+  r += __builtin_shufflevector(m, m, k, k, k, k) * x;
 }
 
 /// Accumulates the moments of the particles of one cell at a time and adds them to the grid when the cell
@@ -83,8 +83,9 @@ class CellMomentScatter {
     }
     // r += Σ_k M_k x[k]: the moments of one power of η contracted over ξ with coefficient rows x, a row over a
     const auto along_x = [](Lanes& r, const Lanes& moments, const Lanes (&x)[3]) MPM_INLINE_LAMBDA {
-#pragma GCC unroll 3
-      for (int k = 0; k < 3; ++k) add_lane_times(r, moments, k, x[k]);
+      add_lane_times<0>(r, moments, x[0]);
+      add_lane_times<1>(r, moments, x[1]);
+      add_lane_times<2>(r, moments, x[2]);
     };
     // node row b of the field, Σ_l wy[l][b] r[l] (− Σ_l wy'[l][b] r_dy[l]), added to the grid
     const auto add_row = [&](double* field, int b, const Lanes (&r)[3], const Lanes* r_dy) MPM_INLINE_LAMBDA {
