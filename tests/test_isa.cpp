@@ -1,5 +1,5 @@
-// The kernels' instruction set, chosen at run time (kernels/isa.hpp): the AVX2 copy of a portable build runs the
-// same scheme as the baseline code, and each copy is deterministic.
+// The kernels' instruction set, chosen at run time (kernels/isa.hpp): the AVX2 and AVX-512 copies of a portable
+// build run the same scheme as the baseline code, and each copy is deterministic.
 #include <catch2/catch.hpp>
 
 #include "kernels/isa.hpp"
@@ -19,17 +19,16 @@ struct ActiveIsaRestored {
 /// The instruction sets this build and CPU can run.
 std::vector<Isa> runnable_isas() {
   std::vector<Isa> isas{Isa::baseline};
-  if (cpu_has_avx2_fma()) isas.push_back(Isa::avx2_fma);
+  for (const Isa isa : {Isa::avx2_fma, Isa::avx512})
+    if (cpu_runs(isa)) isas.push_back(isa);
   return isas;
 }
 
 }  // namespace
 
-TEST_CASE("the AVX2 copy of the kernels agrees with the baseline code to round-off", "[isa]") {
-  if (!cpu_has_avx2_fma()) {
-    WARN("no AVX2 copy in this build or no AVX2 + FMA on this CPU: nothing to compare");
-    return;
-  }
+TEST_CASE("the vector copies of the kernels agree with the baseline code to round-off", "[isa]") {
+  const std::vector<Isa> isas = runnable_isas();
+  if (isas.size() < 3) WARN("this build or CPU runs " << isas.size() - 1 << " of the 2 vector copies");
   const ActiveIsaRestored restore;
   for (const char* update : {"usl", "musl"})
     for (const char* mapping : {"direct", "tls"}) {
@@ -37,13 +36,16 @@ TEST_CASE("the AVX2 copy of the kernels agrees with the baseline code to round-o
       scene["algorithm"]["mapping"] = mapping;
       set_active_isa(Isa::baseline);
       const auto baseline = state_after<2>(scene, 40, 2);
-      set_active_isa(Isa::avx2_fma);
-      const auto avx2 = state_after<2>(scene, 40, 2);
-      const double worst = largest_field_difference(baseline, avx2, column_names_of<2>(scene));
-      INFO(update << " " << mapping << ": largest difference relative to the field's magnitude " << worst);
-      CHECK(worst <= 1e-12);
-      // the AVX2 copy fuses multiply-adds: a difference shows that the other copy ran
-      CHECK(worst > 0.0);
+      for (std::size_t i = 1; i < isas.size(); ++i) {
+        set_active_isa(isas[i]);
+        const auto vector = state_after<2>(scene, 40, 2);
+        const double worst = largest_field_difference(baseline, vector, column_names_of<2>(scene));
+        INFO(isa_name(isas[i]) << ", " << update << " " << mapping
+                               << ": largest difference relative to the field's magnitude " << worst);
+        CHECK(worst <= 1e-12);
+        // the vector copies fuse multiply-adds: a difference shows that another copy ran
+        CHECK(worst > 0.0);
+      }
     }
 }
 
@@ -61,7 +63,9 @@ TEST_CASE("every copy of the kernels is bitwise independent of the thread count"
 
 TEST_CASE("MPM_ISA values are checked", "[isa]") {
   CHECK(isa_for("baseline") == Isa::baseline);
-  CHECK(isa_for("auto") == (cpu_has_avx2_fma() ? Isa::avx2_fma : Isa::baseline));
+  CHECK(isa_for("auto") == runnable_isas().back());  // the best
   CHECK_THROWS_WITH(isa_for("sse9"), Catch::Contains("MPM_ISA") && Catch::Contains("sse9"));
   if (!cpu_has_avx2_fma()) CHECK_THROWS_WITH(isa_for("avx2"), Catch::Contains("MPM_ISA = avx2"));
+  if (cpu_has_avx512()) CHECK(isa_for("avx512") == Isa::avx512);
+  else CHECK_THROWS_WITH(isa_for("avx512"), Catch::Contains("MPM_ISA = avx512"));
 }

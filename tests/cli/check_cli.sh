@@ -37,7 +37,7 @@ for k in ["status", "steps", "particles", "threads", "wall_s", "particle_steps_p
           "fallbacks", "pipeline", "columns", "bytes_per_particle", "isa"]:
     assert k in s, k
 assert s["status"] == "ok" and s["steps"] == 100 and s["threads"] == 2
-assert s["isa"] in ("avx2", "sse2", "native", "baseline"), s["isa"]
+assert s["isa"] in ("avx512", "avx2", "sse2", "native", "baseline"), s["isa"]
 # the DESIGN.md contract keys, plus the relative L2 errors of thesis Figs 5.12-5.14
 assert set(s["errors"]) == {"displacement_rms", "velocity_rms", "stress_rms", "displacement_rel_l2", "stress_rel_l2"}
 assert s["conservation"]["mass_rel_max"] <= 1e-13
@@ -46,7 +46,7 @@ PY
 # the kernels' instruction set: MPM_ISA=baseline is honoured and reported, an unknown value refused
 MPM_ISA=baseline expect 0 "threads \((sse2|native|baseline)\)" -- "$mpm" run "$scenes/plate.json" --set grid.cells=[8,8] \
   --set time.end=0.0001
-MPM_ISA=sse9 expect 2 "MPM_ISA = 'sse9': expected auto, baseline or avx2" -- "$mpm" validate "$scenes/plate.json"
+MPM_ISA=sse9 expect 2 "MPM_ISA = 'sse9': expected auto, baseline, avx2 or avx512" -- "$mpm" validate "$scenes/plate.json"
 # the 1D cubic-spline mapping (thesis §3.2) runs and names its stages; refused in 2D naming the key
 expect 0 "errors \(RMS\)" -- "$mpm" run "$scenes/bar.json" --set algorithm.mapping=cubic-spline --summary cs.json
 grep -q '"cubic-spline-rebuild+p2g-mass"' cs.json && pass=$((pass+1)) || { echo "FAIL: cubic-spline stages"; fail=$((fail+1)); }
