@@ -461,8 +461,9 @@ class Simulation<Dim>::Step {
     } else {
       const unsigned* order = sim_.bins_.order().data();
       sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-        with_active_isa([&](auto) {
-          sim_.block_momentum_[block] = advance_velocity_scatter_momentum<Dim, S>(basis_, pv_, gv_, order, b, e, dt_);
+        with_active_isa([&](auto isa) {
+          sim_.block_momentum_[block] =
+              advance_velocity_scatter_momentum<Dim, S, isa>(basis_, pv_, gv_, order, b, e, dt_);
         });
       });
       sim_.check_momentum(sum_totals(sim_.block_momentum_));

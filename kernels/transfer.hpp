@@ -234,37 +234,6 @@ inline MomentumTotals<Dim> scatter_p2g(const TensorBasis<Dim, Axis>& basis, Part
   return totals;
 }
 
-/// MUSL steps 6–7 fused (thesis eqs 2.47–2.48): v_p += Δt Σ_i φ_i a_i, then q_i += φ_i m_p v_p, for particles
-/// order[begin..end) of one coloured block. One pass instead of a gather and a scatter: the grid accelerations
-/// are only read, the momenta only written by this block's colour.
-template <int Dim, int S, class Axis>
-inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<Dim, Axis>& basis,
-                                                             ParticleView<Dim> p, GridView<Dim> g,
-                                                             const unsigned* order, std::size_t begin,
-                                                             std::size_t end, double dt) {
-  MomentumTotals<Dim> totals;
-  for (std::size_t k = begin; k < end; ++k) {
-    const std::size_t ip = order[k];
-    const auto st = stencil_of<Dim, S>(basis, p.x, ip);
-    RowVector<S> a_y[Dim] = {};  // Σ_j wy_j a_ij, then contracted with wx (as in gather_g2p)
-    for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
-      for (int d = 0; d < Dim; ++d) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
-    });
-    const double mp = p.m[ip];
-    double vp[Dim], mv[Dim];
-    for (int d = 0; d < Dim; ++d) {
-      vp[d] = p.v[d][ip] + dt * reduce(st.wx * a_y[d]);
-      p.v[d][ip] = vp[d];
-      mv[d] = mp * vp[d];
-    }
-    totals.add(mp, vp);
-    for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
-      for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, st.wx * (wy * mv[d]));
-    });
-  }
-  return totals;
-}
-
 /// The sums a gather forms at a batch of particles, from which it updates them: Σ_i φ_i a_i, Σ_i φ_i v_i and
 /// ∇v = Σ_i v_i ⊗ ∇φ_i (row-major), per particle of the batch.
 template <int Dim, std::size_t N>
@@ -460,6 +429,84 @@ MPM_INLINE void gather_g2p(const TensorBasis<Dim, Axis>& basis, ParticleView<Dim
     }
   }
   if constexpr (Fields.position && !Fields.reference) guard.moved(max_move);  // (reference: binned once, by X)
+}
+
+/// MUSL steps 6–7 fused (thesis eqs 2.47–2.48): v_p += Δt Σ_i φ_i a_i, then q_i += φ_i m_p v_p, for particles
+/// order[begin..end) of one coloured block. One pass instead of a gather and a scatter: the grid accelerations
+/// are only read, the momenta only written by this block's colour. I: the instruction set the caller is compiled
+/// for; in code with AVX2 the 2D quadratic rows are GCC vectors (MomentLanes, one 256-bit register), where the
+/// stencil rows of a portable build are two 128-bit halves: the pass took 1.3× the native build's time with them.
+template <int Dim, int S, Isa I = Isa::baseline, class Axis>
+inline MomentumTotals<Dim> advance_velocity_scatter_momentum(const TensorBasis<Dim, Axis>& basis,
+                                                             ParticleView<Dim> p, GridView<Dim> g,
+                                                             const unsigned* order, std::size_t begin,
+                                                             std::size_t end, double dt) {
+  MomentumTotals<Dim> totals;
+  // v_p += Δt a_p; mv = m_p v_p
+  const auto advance = [&](std::size_t ip, const double (&a)[Dim], double (&mv)[Dim]) MPM_INLINE_LAMBDA {
+    const double mp = p.m[ip];
+    double vp[Dim];
+    for (int d = 0; d < Dim; ++d) {
+      vp[d] = p.v[d][ip] + dt * a[d];
+      p.v[d][ip] = vp[d];
+      mv[d] = mp * vp[d];
+    }
+    totals.add(mp, vp);
+  };
+  if constexpr (gathers_in_lanes<I, Dim, Axis>) {
+    using Lanes = MomentLanes;  // (passed by reference: a 32-byte vector returned by value warns in SSE2 code)
+    // w = the row of the 3 functions at x, as uniform_row; `first` its first function
+    const auto weights = [&](const UniformAxis<3>& axis, double x, Lanes& w, int& first) MPM_INLINE_LAMBDA {
+      const auto at = axis.locate(x);
+      Lanes q[3];
+      std::memcpy(q, detail::padded_uniform<3>[at.span_class].data(), sizeof q);
+      w = q[0] + at.xi * (q[1] + at.xi * q[2]);
+      first = at.cell;
+    };
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::size_t ip = order[k];
+      Lanes wx, wy, a_y[2] = {};  // a_y: Σ_j wy_j a_ij, then contracted with wx (as in gather_g2p)
+      int first0, first1;
+      weights(basis.axis[0], p.x[0][ip], wx, first0);
+      weights(basis.axis[1], p.x[1][ip], wy, first1);
+      for (int b = 0; b < 3; ++b)
+        for (int d = 0; d < 2; ++d) {
+          Lanes row;
+          std::memcpy(&row, g.a[d] + (first1 + b) * g.stride1 + first0, sizeof row);
+          a_y[d] += wy[b] * row;
+        }
+      double a[2], mv[2];
+      for (int d = 0; d < 2; ++d) {
+        const Lanes t = wx * a_y[d];
+        a[d] = (t[0] + t[1]) + (t[2] + t[3]);
+      }
+      advance(ip, a, mv);
+      for (int b = 0; b < 3; ++b)
+        for (int d = 0; d < 2; ++d) {
+          double* at = g.q[d] + (first1 + b) * g.stride1 + first0;
+          Lanes row;
+          std::memcpy(&row, at, sizeof row);
+          row += wx * (wy[b] * mv[d]);
+          std::memcpy(at, &row, sizeof row);
+        }
+    }
+  } else {
+    for (std::size_t k = begin; k < end; ++k) {
+      const std::size_t ip = order[k];
+      const auto st = stencil_of<Dim, S>(basis, p.x, ip);
+      RowVector<S> a_y[Dim] = {};  // Σ_j wy_j a_ij, then contracted with wx (as in gather_g2p)
+      for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
+        for (int d = 0; d < Dim; ++d) a_y[d] += wy * load_row<RowVector<S>>(g.a[d] + row);
+      });
+      double a[Dim], mv[Dim];
+      for (int d = 0; d < Dim; ++d) a[d] = reduce(st.wx * a_y[d]);
+      advance(ip, a, mv);
+      for_each_row(st, g.stride1, [&](int row, double wy, double) MPM_INLINE_LAMBDA {
+        for (int d = 0; d < Dim; ++d) add_to_row(g.q[d] + row, st.wx * (wy * mv[d]));
+      });
+    }
+  }
+  return totals;
 }
 
 /// Entries per row of the consistent mass in band storage: the (2S − 1)^Dim functions j whose support overlaps

@@ -1,7 +1,8 @@
 // The P2G of the 2D quadratic fast path by cell moments (scatter_p2g with CellMomentScatter, kernels/cell_moments.hpp)
 // against the P2G by stencil rows of every particle (scatter_rows), for every combination of grid sums a scheme
 // scatters, with and without a body force, particles in every span class (first, interior, last cell, a grid of one
-// cell), on the grid's boundary and outside it, in runs of one cell and interleaved across cells.
+// cell), on the grid's boundary and outside it, in runs of one cell and interleaved across cells; and MUSL's fused
+// velocity and momentum pass of AVX2 code (rows as GCC vectors) against the same pass by stencil rows.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -116,6 +117,16 @@ struct ScatterCase {
   }
 };
 
+/// The largest difference of two fields, and the largest magnitude of the second.
+std::pair<double, double> largest_difference(const std::vector<double>& a, const std::vector<double>& b) {
+  double worst = 0.0, scale = 0.0;
+  for (std::size_t i = 0; i < b.size(); ++i) {
+    worst = std::max(worst, std::abs(a[i] - b[i]));
+    scale = std::max(scale, std::abs(b[i]));
+  }
+  return {worst, scale};
+}
+
 template <ScatterFields Fields, class Body>
 void check_moments_equal_rows(const char* name, const Body& body) {
   for (const std::array<int, 2> cells : {std::array<int, 2>{7, 5}, std::array<int, 2>{1, 4}})
@@ -125,10 +136,7 @@ void check_moments_equal_rows(const char* name, const Body& body) {
       for (int field = 0; field < 5; ++field) {
         INFO(name << ", " << cells[0] << " x " << cells[1] << " cells, " << (interleaved ? "interleaved" : "by cell")
                   << ", grid field " << field);
-        double scale = 0.0, worst = 0.0;
-        for (const double value : rows[field]) scale = std::max(scale, std::abs(value));
-        for (std::size_t i = 0; i < rows[field].size(); ++i)
-          worst = std::max(worst, std::abs(moments[field][i] - rows[field][i]));
+        const auto [worst, scale] = largest_difference(moments[field], rows[field]);
         const bool scattered = field == 0 ? Fields.mass : field < 3 ? Fields.momentum : Fields.force;
         CHECK((scale > 0.0) == scattered);  // the field is scattered or left alone by both
         INFO("largest difference, relative to the field's magnitude: " << worst / scale);
@@ -149,4 +157,44 @@ TEST_CASE("the scatter by cell moments equals the scatter by stencil rows to rou
   check_moments_equal_rows<ScatterFields{.mass = false, .momentum = true, .force = false}>("momentum", none);
   check_moments_equal_rows<ScatterFields{.mass = true, .momentum = true, .force = false}>("USF", none);
   check_moments_equal_rows<ScatterFields{.mass = false, .momentum = false, .force = true}>("force", body);
+}
+
+TEST_CASE("MUSL's fused velocity and momentum pass of AVX2 code equals the pass by stencil rows",
+          "[transfer][moments]") {
+  for (const std::array<int, 2> cells : {std::array<int, 2>{7, 5}, std::array<int, 2>{1, 4}})
+    for (const bool interleaved : {false, true}) {
+      INFO(cells[0] << " x " << cells[1] << " cells, " << (interleaved ? "interleaved" : "by cell"));
+      ScatterCase vector(cells, interleaved), rows(cells, interleaved);
+      std::mt19937 random(5);
+      std::uniform_real_distribution<double> unit(-1.0, 1.0);
+      std::vector<double> a[2];
+      for (auto& ad : a) {
+        ad.resize(static_cast<std::size_t>(vector.stride) * (cells[1] + 2));
+        for (double& value : ad) value = unit(random);
+      }
+      // the grid's momenta and the totals; the particles' velocities change in place
+      const auto run = [&](ScatterCase& c, auto isa) {
+        std::array<std::vector<double>, 5> grid;
+        for (auto& g : grid) g.assign(a[0].size(), 0.0);
+        GridView<2> g = c.view(grid);
+        g.a = {a[0].data(), a[1].data()};
+        const auto totals = advance_velocity_scatter_momentum<2, ScatterCase::S, decltype(isa)::value>(
+            c.basis, c.particles(), g, c.order.data(), 0, c.order.size(), 0.25);
+        return std::pair{grid, totals};
+      };
+      // Isa::avx2_fma: the vector rows' code, here compiled for the test's own instruction set
+      const auto [grid_vector, totals_vector] = run(vector, IsaTag<Isa::avx2_fma>{});
+      const auto [grid_rows, totals_rows] = run(rows, IsaTag<Isa::baseline>{});
+      for (int d = 0; d < 2; ++d) {
+        INFO("axis " << d);
+        const auto [v_worst, v_scale] = largest_difference(vector.columns[2 + d], rows.columns[2 + d]);
+        CHECK(v_worst <= 1e-14 * v_scale);
+        const auto [q_worst, q_scale] = largest_difference(grid_vector[1 + d], grid_rows[1 + d]);
+        CHECK(q_scale > 0.0);
+        CHECK(q_worst <= 1e-14 * q_scale);
+        CHECK(totals_vector.mv[d] == Approx(totals_rows.mv[d]).epsilon(1e-14));
+      }
+      CHECK(totals_vector.m_abs_v == Approx(totals_rows.m_abs_v).epsilon(1e-14));
+      for (const int field : {0, 3, 4}) CHECK(largest_difference(grid_vector[field], grid_rows[field]).second == 0.0);
+    }
 }
