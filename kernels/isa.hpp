@@ -2,8 +2,9 @@
 // The instruction set of the hot kernels, chosen when the program starts: the portable library (baseline x86-64,
 // SSE2) carries two more copies of each transfer kernel, compiled for AVX2 + FMA (x86-64-v3) and for AVX-512
 // (x86-64-v4), and runs the best the CPU has, so that users who link `mpm::engine` without building it for their
-// machine (MPM_NATIVE) get its speed. The AVX-512 copy runs the same 256-bit vectors as the AVX2 one; what it gains
-// is 32 vector registers instead of 16, where the scatter's cell moments spilled (docs/PERFORMANCE.md).
+// machine (MPM_NATIVE) get its speed. In the AVX-512 copy the cell moments keep their 256-bit vectors and gain 32
+// registers instead of 16 (with 16 they spilled at every particle); the gather's loop across particles runs in 8
+// lanes of 512 bits (docs/PERFORMANCE.md).
 //
 // `with_active_isa(f)` runs f inlined into a function compiled for the active instruction set: `flatten` inlines
 // everything f calls (the kernels are templates and always-inline helpers). f receives the instruction set as a
