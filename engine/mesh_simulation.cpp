@@ -119,7 +119,7 @@ MeshSimulation::MeshSimulation(const Scene& scene)
   check_body_materials<2>(scene, problem_->bodies());
   const Seeds<2> seeds =
       std::visit([&](const auto& basis) { return seed_triangles(scene, mesh(), basis, *problem_); }, basis_);
-  store_ = store_from_seeds(seeds, needed_fields(*problem_, scene.algorithm.update));
+  store_ = store_from_seeds(seeds, *problem_, scene.algorithm.update);
   particle_mass_ = deterministic_sum(seeds.m.size(), [&](std::size_t p) { return seeds.m[p]; });
   empty_mass_ = 1e-12 * *std::min_element(seeds.m.begin(), seeds.m.end());
   dt_ = time_step_for(scene, critical_step());
@@ -161,14 +161,14 @@ CriticalStep MeshSimulation::critical_step() const {
 }
 
 void MeshSimulation::load_state(const SimulationState& state) {
-  load_particle_columns(store_, state);
+  load_particle_columns(store_, state, *problem_);
   step_ = state.step;
   time_ = state.time;
   conservation_ = state.conservation;
 }
 
 double MeshSimulation::external_power() const {
-  return body_force_power<2>(store_, *problem_, time_, reference_columns_of(store_));
+  return body_force_power<2>(store_, *problem_, time_);
 }
 
 /// Each particle's triangle (the mesh's bucket grid), then the particles of each triangle in index order.
@@ -480,7 +480,7 @@ void MeshSimulation::step() {
   const double dt = step_ + 1 == steps_total_ ? scene_.time.end - dt_ * step_ : dt_;
   locate_particles();
   cg_iterations_ = 0;
-  const BodyForce<2> body = problem_->body_force(time_, reference_columns_of(store_));
+  const BodyForce<2> body = problem_->body_force(time_, body_constants_of(store_));
   std::visit(
       [&](const auto& basis, const auto& material, const auto& force) {
         Step<std::decay_t<decltype(basis)>, std::decay_t<decltype(material)>, std::decay_t<decltype(force)>> s(

@@ -239,12 +239,39 @@ CriticalStep critical_step_of(const ParticleStore<Dim>& s, const Material& mater
   return out;
 }
 
-/// Power of the body forces on the particles, Σ_p m_p b_p(t)·v_p, W; `X` the reference columns (null if absent).
+/// The reference-position columns, or nulls if the store has none.
+template <int Dim>
+std::array<const double*, Dim> reference_columns_of(const ParticleStore<Dim>& s) {
+  std::array<const double*, Dim> X{};
+  if (s.has(Field::reference))
+    for (int d = 0; d < Dim; ++d) X[d] = s.column(Field::reference, d).data();
+  return X;
+}
+
+/// The body force's constant columns, or nulls if the store has none.
+template <int Dim>
+BodyConstants<Dim> body_constants_of(const ParticleStore<Dim>& s) {
+  BodyConstants<Dim> c{};
+  if (s.has(Field::body_constants))
+    for (int k = 0; k < 2 * Dim; ++k) c[k] = s.column(Field::body_constants, k).data();
+  return c;
+}
+
+/// Forms the body force's constants from the reference positions, if the store keeps them: after seeding and after
+/// loading a state, which does not hold them.
+template <int Dim>
+void form_body_constants(ParticleStore<Dim>& s, const Problem<Dim>& problem) {
+  if (!s.has(Field::body_constants)) return;
+  std::array<double*, 2 * Dim> out;
+  for (int k = 0; k < 2 * Dim; ++k) out[k] = s.column(Field::body_constants, k).data();
+  problem.form_body_constants(reference_columns_of(s), s.size(), out);
+}
+
+/// Power of the body forces on the particles, Σ_p m_p b_p(t)·v_p, W.
 /// The force comes a batch of particles at a time (at_batch, in the active instruction set), as in the scatter:
 /// particle by particle (at, with libm's log) the plate's power took twice the instructions (docs/PERFORMANCE.md).
 template <int Dim>
-double body_force_power(const ParticleStore<Dim>& s, const Problem<Dim>& problem, double t,
-                        std::array<const double*, Dim> X) {
+double body_force_power(const ParticleStore<Dim>& s, const Problem<Dim>& problem, double t) {
   if (!problem.has_body_force()) return 0.0;
   const auto m = s.column(Field::mass);
   std::array<std::span<const double>, Dim> v;
@@ -267,17 +294,10 @@ double body_force_power(const ParticleStore<Dim>& s, const Problem<Dim>& problem
           })[0];
         }
       },
-      problem.body_force(t, X));
+      problem.body_force(t, body_constants_of(s)));
 }
 
-/// The reference-position columns, or nulls if the store has none.
-template <int Dim>
-std::array<const double*, Dim> reference_columns_of(const ParticleStore<Dim>& s) {
-  std::array<const double*, Dim> X{};
-  if (s.has(Field::reference))
-    for (int d = 0; d < Dim; ++d) X[d] = s.column(Field::reference, d).data();
-  return X;
-}
+
 
 /// A copy of every particle column with the clock and the conservation maxima.
 template <int Dim>
@@ -294,10 +314,10 @@ SimulationState save_particle_state(const ParticleStore<Dim>& s, long step, doub
   return st;
 }
 
-/// Copies a state's columns into the store, matched by name (a file may list them in another order); throws
-/// std::invalid_argument if one is missing or has another particle count.
+/// Copies a state's columns into the store, matched by name (a file may list them in another order), and forms the
+/// body force's constants from them; throws std::invalid_argument if one is missing or has another particle count.
 template <int Dim>
-void load_particle_columns(ParticleStore<Dim>& s, const SimulationState& st) {
+void load_particle_columns(ParticleStore<Dim>& s, const SimulationState& st, const Problem<Dim>& problem) {
   const auto names = s.column_names();
   std::vector<std::size_t> source(names.size());
   for (std::size_t k = 0; k < names.size(); ++k) {
@@ -310,6 +330,7 @@ void load_particle_columns(ParticleStore<Dim>& s, const SimulationState& st) {
   }
   for (std::size_t k = 0; k < names.size(); ++k)
     std::copy(st.columns[source[k]].begin(), st.columns[source[k]].end(), s.column(names[k]).begin());
+  form_body_constants(s, problem);
 }
 
 /// Throws UnstableRun naming the step, stage, particle, its position, J and velocity, and what went wrong
@@ -358,15 +379,16 @@ inline long count_steps(const Scene& scene, double dt) {
   return std::abs(n - rounded) < 1e-9 * std::max(1.0, n) ? std::max(1L, rounded) : static_cast<long>(std::ceil(n));
 }
 
-/// The particle columns a run needs: the state, and the reference position where an exact solution, a body force
-/// or a basis that moves with the body reads it.
+/// The particle columns a run needs: the state; the reference position where an exact solution, a body force's
+/// constants or a basis that moves with the body read it; the body force's constants.
 template <int Dim>
 FieldSet needed_fields(const Problem<Dim>& problem, Update update) {
   FieldSet f;
   f.add(Field::position).add(Field::velocity).add(Field::deformation).add(Field::stress);
   f.add(Field::mass).add(Field::volume0);
-  if (problem.has_exact() || problem.body_force_needs_reference() || basis_moves_with_body(update))
+  if (problem.has_exact() || problem.body_force_has_constants() || basis_moves_with_body(update))
     f.add(Field::reference);
+  if (problem.body_force_has_constants()) f.add(Field::body_constants);
   return f;
 }
 
@@ -389,13 +411,13 @@ struct Seeds {
   std::vector<std::array<double, Dim>> v;
 };
 
-/// The particle store of the seeds, at rest in the reference state (F = I, σ = 0 for both laws). Throws SceneError
-/// if there are none.
+/// The particle store of the seeds, with the columns the problem and update need (needed_fields), at rest in the
+/// reference state (F = I, σ = 0 for both laws). Throws SceneError if there are none.
 template <int Dim>
-ParticleStore<Dim> store_from_seeds(const Seeds<Dim>& seeds, FieldSet fields) {
+ParticleStore<Dim> store_from_seeds(const Seeds<Dim>& seeds, const Problem<Dim>& problem, Update update) {
   const std::size_t n = seeds.x.size();
   if (n == 0) throw SceneError("scene: bodies: no particle falls inside any body");
-  ParticleStore<Dim> store(n, fields);
+  ParticleStore<Dim> store(n, needed_fields(problem, update));
   auto pv = store.view();
   for (std::size_t p = 0; p < n; ++p) {
     for (int d = 0; d < Dim; ++d) {
@@ -407,6 +429,7 @@ ParticleStore<Dim> store_from_seeds(const Seeds<Dim>& seeds, FieldSet fields) {
     store.column(Field::mass)[p] = seeds.m[p];
     store.column(Field::volume0)[p] = seeds.V0[p];
   }
+  form_body_constants(store, problem);
   return store;
 }
 

@@ -17,6 +17,7 @@ const char* field_prefix(Field f) {
     case Field::stress: return "s";
     case Field::mass: return "m";
     case Field::volume0: return "V0";
+    case Field::body_constants: return "body";
     default: return "?";
   }
 }
@@ -27,7 +28,8 @@ std::string component_name(Field f, int c) {
   switch (f) {
     case Field::position:
     case Field::reference:
-    case Field::velocity: return p + std::to_string(c);
+    case Field::velocity:
+    case Field::body_constants: return p + std::to_string(c);
     case Field::deformation: return p + std::to_string(c / Dim) + std::to_string(c % Dim);
     case Field::stress: {
       static const char* names2[] = {"00", "01", "11"};
@@ -64,7 +66,9 @@ template <int Dim>
 std::vector<std::string> ParticleStore<Dim>::column_names() const {
   std::vector<std::string> names;
   for (int f = 0; f < field_count; ++f)
-    for (int c = 0; c < static_cast<int>(columns_[f].size()); ++c) names.push_back(component_name<Dim>(Field(f), c));
+    if (Field(f) != Field::body_constants)
+      for (int c = 0; c < static_cast<int>(columns_[f].size()); ++c)
+        names.push_back(component_name<Dim>(Field(f), c));
   return names;
 }
 

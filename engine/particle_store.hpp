@@ -29,8 +29,12 @@ struct AlignedAllocator {
 
 using Column = std::vector<double, AlignedAllocator<double>>;
 
-/// The particle fields a pipeline may need; each has one column per component.
-enum class Field : std::uint8_t { position, reference, velocity, deformation, stress, mass, volume0, count };
+/// The particle fields a pipeline may need; each has one column per component. body_constants are what a body
+/// force takes from the fixed reference position, formed once from it (Problem::form_body_constants; the plate's
+/// sin k X_d and cos k X_d): derived, so not part of the state (column_names) that outputs and checkpoints hold.
+enum class Field : std::uint8_t {
+  position, reference, velocity, deformation, stress, mass, volume0, body_constants, count
+};
 
 template <int Dim>
 constexpr int components(Field f) {
@@ -40,6 +44,7 @@ constexpr int components(Field f) {
     case Field::velocity: return Dim;
     case Field::deformation: return Dim * Dim;
     case Field::stress: return sym_components<Dim>;
+    case Field::body_constants: return 2 * Dim;
     default: return 1;
   }
 }
@@ -64,7 +69,7 @@ class ParticleStore {
   std::span<double> column(Field f, int c = 0);
   std::span<const double> column(Field f, int c = 0) const;
 
-  /// Names of the allocated columns, in storage order (x0, x1, X0, ..., m, V0).
+  /// Names of the allocated state columns, in storage order (x0, x1, X0, ..., m, V0): all but the body constants.
   std::vector<std::string> column_names() const;
   /// Column by its name (as listed by column_names()).
   std::span<double> column(const std::string& name);

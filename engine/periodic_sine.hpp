@@ -1,6 +1,6 @@
 #pragma once
-// sin and cos of one period over [0, L] from a table and a short series: for the body forces of manufactured
-// solutions, which evaluate the same sin(2π X/L) and cos(2π X/L) of the fixed reference positions at every step.
+// sin and cos of one period over [0, L] from a table and a short series: for the exact solutions of manufactured
+// problems, which evaluate the same sin(2π X/L) and cos(2π X/L) of the fixed reference positions at every sample.
 #include <algorithm>
 #include <array>
 #include <cmath>

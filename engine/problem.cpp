@@ -15,7 +15,11 @@ namespace mpm {
 using std::numbers::pi;
 
 template <int Dim>
-BodyForce<Dim> Problem<Dim>::body_force(double, std::array<const double*, Dim>) const {
+void Problem<Dim>::form_body_constants(std::array<const double*, Dim>, std::size_t,
+                                       std::array<double*, 2 * Dim>) const {}
+
+template <int Dim>
+BodyForce<Dim> Problem<Dim>::body_force(double, BodyConstants<Dim>) const {
   return NoBodyForce{};
 }
 
@@ -88,10 +92,19 @@ class VibratingPlate final : public Problem<2> {
   std::vector<Body> bodies() const override {
     return {{{0.0, 0.0}, {L_, L_}, mat_, [this](const std::array<double, 2>& X) { return exact(X, 0.0).v; }}};
   }
-  bool body_force_needs_reference() const override { return true; }
   bool has_body_force() const override { return true; }
-  BodyForce<2> body_force(double t, std::array<const double*, 2> X) const override {
-    return PlateBodyForce::at_time(X, trig_, A_, L_, c_, k_.lambda, k_.mu, mat_.density, t);
+  bool body_force_has_constants() const override { return true; }
+  void form_body_constants(std::array<const double*, 2> X, std::size_t n,
+                           std::array<double*, 4> out) const override {
+    for (int d = 0; d < 2; ++d)
+      for (std::size_t p = 0; p < n; ++p) {
+        const double kX = 2 * pi / L_ * X[d][p];
+        out[2 * d][p] = std::sin(kX);
+        out[2 * d + 1][p] = std::cos(kX);
+      }
+  }
+  BodyForce<2> body_force(double t, BodyConstants<2> trig) const override {
+    return PlateBodyForce::at_time(trig, A_, L_, c_, k_.lambda, k_.mu, mat_.density, t);
   }
   bool has_exact() const override { return true; }
   ExactState<2> exact(const std::array<double, 2>& X, double t) const override {
@@ -132,7 +145,7 @@ class VibratingPlate final : public Problem<2> {
   MaterialSpec mat_;
   Lame k_;
   double L_, A_, c_;
-  PeriodicSine trig_;  ///< sin and cos of 2π X/L for the body force and the exact solution
+  PeriodicSine trig_;  ///< sin and cos of 2π X/L for the exact solution
 };
 
 /// Column compaction (thesis §5.4.2, PROBLEMS.md): [0, H] fixed at the bottom, body force ramped to b_f over t_f;
@@ -149,7 +162,7 @@ class ColumnCompactionProblem final : public Problem<1> {
     return {{{0.0}, {c_.height}, c_.material, [](const std::array<double, 1>&) { return std::array<double, 1>{}; }}};
   }
   bool has_body_force() const override { return true; }
-  BodyForce<1> body_force(double t, std::array<const double*, 1>) const override {
+  BodyForce<1> body_force(double t, BodyConstants<1>) const override {
     return UniformBodyForce<1>{{c_.body_force(t)}};
   }
   bool has_exact() const override { return c_.material.model == MaterialModel::linear_elastic; }
@@ -217,7 +230,7 @@ class UserScene final : public Problem<Dim> {
   }
   std::vector<Body> bodies() const override { return bodies_; }
   bool has_body_force() const override { return has_gravity_; }
-  BodyForce<Dim> body_force(double, std::array<const double*, Dim>) const override {
+  BodyForce<Dim> body_force(double, BodyConstants<Dim>) const override {
     if (!has_gravity_) return NoBodyForce{};
     return UniformBodyForce<Dim>{gravity_};
   }

@@ -31,61 +31,53 @@ struct UniformBodyForce {
   }
 };
 
-/// The manufactured body force of the vibrating plate (paper eq. 42 with π², PROBLEMS.md) at one time, at reference
-/// positions. Everything that depends on time alone is formed once per step (at_time), and the sines and cosines of
-/// the fixed reference coordinates come from the problem's table (PeriodicSine), so a particle costs a log and a few
-/// table reads: with libm's sin and cos per particle and step the large plate ran at 0.6× the throughput of a
-/// scene without body force. The scatter asks for a batch of particles (at_batch): the table reads come first,
-/// then the arithmetic and the log (log_for, vector_log in AVX2 code) run in vector lanes.
+/// The columns of a body force's per-particle constants (Field::body_constants), null where not stored.
+template <int Dim>
+using BodyConstants = std::array<const double*, 2 * Dim>;
+
+/// The manufactured body force of the vibrating plate (paper eq. 42 with π², PROBLEMS.md) at one time. What depends
+/// on time alone is formed once per step (at_time), and what depends on the fixed reference position alone, sin k X_d
+/// and cos k X_d, once per run (VibratingPlate::form_body_constants, kept with the particles), so a particle costs a
+/// log and a few products: with libm's sin and cos per particle and step the large plate ran at 0.6× the throughput
+/// of a scene without body force, and with a table of them (PeriodicSine) the plate's scatter still took twice the
+/// time of the block's (docs/PERFORMANCE.md). The scatter asks for a batch of particles (at_batch): the column reads come
+/// first, then the arithmetic and the log (log_for, vector_log in AVX2 code) run in vector lanes.
 struct PlateBodyForce {
   static constexpr bool active = true;
-  std::array<const double*, 2> X;  ///< reference positions
-  const PeriodicSine* trig;        ///< sin(k X_d), cos(k X_d), k = 2π/L
-  std::array<double, 2> u_amp;     ///< A sin(ωt), A sin(ωt + π): u_d = u_amp_d sin(k X_d)
-  std::array<double, 2> F_amp;     ///< k u_amp: F_dd = 1 + F_amp_d cos(k X_d)
+  /// columns sin k X_0, cos k X_0, sin k X_1, cos k X_1 (k = 2π/L)
+  BodyConstants<2> trig;
+  std::array<double, 2> u_amp;  ///< A sin(ωt), A sin(ωt + π): u_d = u_amp_d sin(k X_d)
+  std::array<double, 2> F_amp;  ///< k u_amp: F_dd = 1 + F_amp_d cos(k X_d)
   double lambda, mu, rho0, common, scale;  ///< common = 4μ/ρ₀ − c², scale = π²/L²
 
-  static PlateBodyForce at_time(std::array<const double*, 2> X, const PeriodicSine& trig, double A, double L,
-                                double c, double lambda, double mu, double rho0, double t) {
+  static PlateBodyForce at_time(BodyConstants<2> trig, double A, double L, double c, double lambda, double mu,
+                                double rho0, double t) {
     const double pi = std::numbers::pi, wt = c * pi * t / L, k = 2 * pi / L;
     const std::array<double, 2> u_amp{A * std::sin(wt), A * std::sin(wt + pi)};
-    return {X, &trig, u_amp, {k * u_amp[0], k * u_amp[1]}, lambda, mu, rho0, 4 * mu / rho0 - c * c,
-            pi * pi / (L * L)};
+    return {trig, u_amp, {k * u_amp[0], k * u_amp[1]}, lambda, mu, rho0, 4 * mu / rho0 - c * c, pi * pi / (L * L)};
   }
 
   template <int D>
   std::array<double, D> at(std::size_t p) const {
-    if constexpr (D != 2) {
-      return {};
-    } else {
-      const PeriodicSine::Node x = trig->node(X[0][p]), y = trig->node(X[1][p]);
-      return force(x.sin_i, x.cos_i, x.b, y.sin_i, y.cos_i, y.b);
-    }
+    if constexpr (D != 2) return {};
+    else return force(trig[0][p], trig[1][p], trig[2][p], trig[3][p]);
   }
 
   /// out[j] = at(index[j]) for j < count ≤ body_force_batch, by the same arithmetic, in code compiled for I.
   template <int D, Isa I = Isa::baseline>
   void at_batch(const unsigned* index, std::size_t count, std::array<double, D>* out) const {
     if constexpr (D == 2) {
-      double sin_i[2][body_force_batch], cos_i[2][body_force_batch], b[2][body_force_batch];  // the table reads (gathers)
+      double c[4][body_force_batch];  // the column reads (gathers)
       for (std::size_t j = 0; j < count; ++j)
-        for (int d = 0; d < 2; ++d) {
-          const PeriodicSine::Node n = trig->node(X[d][index[j]]);
-          sin_i[d][j] = n.sin_i;
-          cos_i[d][j] = n.cos_i;
-          b[d][j] = n.b;
-        }
+        for (int k = 0; k < 4; ++k) c[k][j] = trig[k][index[j]];
       for (std::size_t j = 0; j < count; ++j)  // unit-stride arithmetic: vectorised
-        out[j] = force<I>(sin_i[0][j], cos_i[0][j], b[0][j], sin_i[1][j], cos_i[1][j], b[1][j]);
+        out[j] = force<I>(c[0][j], c[1][j], c[2][j], c[3][j]);
     }
   }
 
  private:
   template <Isa I = Isa::baseline>
-  std::array<double, 2> force(double sin_xi, double cos_xi, double bx, double sin_yi, double cos_yi,
-                              double by) const {
-    const auto [sin_x, cos_x] = PeriodicSine::rotate(sin_xi, cos_xi, bx);
-    const auto [sin_y, cos_y] = PeriodicSine::rotate(sin_yi, cos_yi, by);
+  std::array<double, 2> force(double sin_x, double cos_x, double sin_y, double cos_y) const {
     const double F11 = 1 + F_amp[0] * cos_x, F22 = 1 + F_amp[1] * cos_y;
     const double kk = lambda * (log_for<I>(F11 * F22) - 1) - mu;
     return {scale * u_amp[0] * sin_x * (common - 4 * kk / (rho0 * F11 * F11)),
@@ -125,11 +117,15 @@ class Problem {
 
   virtual ~Problem() = default;
   virtual std::vector<Body> bodies() const = 0;
-  /// Whether the body force depends on the reference position (then X is stored per particle).
-  virtual bool body_force_needs_reference() const { return false; }
   virtual bool has_body_force() const { return false; }
-  /// The body force at time t; `X` are the reference-position columns (null if not stored).
-  virtual BodyForce<Dim> body_force(double t, std::array<const double*, Dim> X) const;
+  /// Whether the body force takes constants from the reference position (then X and the constants are stored per
+  /// particle, Field::body_constants).
+  virtual bool body_force_has_constants() const { return false; }
+  /// Forms the body force's constants of n particles from their reference positions X (2 Dim columns of n).
+  virtual void form_body_constants(std::array<const double*, Dim> X, std::size_t n,
+                                   std::array<double*, 2 * Dim> out) const;
+  /// The body force at time t; `constants` its columns (null if not stored).
+  virtual BodyForce<Dim> body_force(double t, BodyConstants<Dim> constants) const;
   /// Whether the problem loads the grid with point forces (then point_loads is called at every force scatter).
   virtual bool has_point_loads() const { return false; }
   /// The point forces at time t on the particles (n of them), placed in the current configuration, or in the

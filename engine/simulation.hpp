@@ -114,7 +114,6 @@ class Simulation {
   /// Fills the max-ent basis' stencil cache for this step's particle positions (no-op for other bases); with
   /// `fill` false, empties it.
   void cache_stencils(bool fill);
-  std::array<const double*, Dim> reference_columns() const;
 
   Scene scene_;
   std::unique_ptr<Problem<Dim>> problem_;

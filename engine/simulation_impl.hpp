@@ -260,7 +260,7 @@ Simulation<Dim>::Simulation(const Scene& scene)
 
   check_body_materials<Dim>(scene, problem_->bodies());
   const Seeds<Dim> seeds = seed_particles(scene, *problem_);
-  store_ = store_from_seeds(seeds, needed_fields(*problem_, scene.algorithm.update));
+  store_ = store_from_seeds(seeds, *problem_, scene.algorithm.update);
   particle_mass_ = deterministic_sum(seeds.m.size(), [&](std::size_t p) { return seeds.m[p]; });
 
   dt_ = time_step_for(scene, critical_step());
@@ -290,7 +290,7 @@ SimulationState Simulation<Dim>::save_state() const {
 
 template <int Dim>
 void Simulation<Dim>::load_state(const SimulationState& st) {
-  load_particle_columns(store_, st);
+  load_particle_columns(store_, st, *problem_);
   step_ = st.step;
   time_ = st.time;
   conservation_ = st.conservation;
@@ -317,7 +317,7 @@ void Simulation<Dim>::step() {
     store_.permute(bins_.order());
     bins_.adopt_order();
   }
-  const BodyForce<Dim> body = problem_->body_force(time_, reference_columns());
+  const BodyForce<Dim> body = problem_->body_force(time_, body_constants_of(store_));
   // a step that throws has moved the particles by an unknown amount: until it returns, bin before the next scatter
   const double moved_before = moved_cells_;
   moved_cells_ = std::numeric_limits<double>::infinity();
@@ -635,11 +635,6 @@ CriticalStep Simulation<Dim>::critical_step() const {
 }
 
 template <int Dim>
-std::array<const double*, Dim> Simulation<Dim>::reference_columns() const {
-  return reference_columns_of(store_);
-}
-
-template <int Dim>
 double Simulation<Dim>::external_power() const {
   // Point loads (the traction bar): force · the grid velocity at the load point, Σ_i φ_i(x) F · v_i, the power of the
   // nodal forces the load adds (point_load.hpp). Without this term the energy guard saw the traction's work as an
@@ -660,7 +655,7 @@ double Simulation<Dim>::external_power() const {
           },
           basis_);
   }
-  return loads_power + body_force_power<Dim>(store_, *problem_, time_, reference_columns());
+  return loads_power + body_force_power<Dim>(store_, *problem_, time_);
 }
 
 template <int Dim>

@@ -3,6 +3,7 @@
 // exact solution (the energy guard's power, the errors) against plain sums particle by particle.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <random>
@@ -13,6 +14,21 @@
 #include "scene_builders.hpp"
 
 using namespace mpm;
+
+namespace {
+
+/// The plate's body constants (Problem::form_body_constants) at the reference positions X0, X1.
+struct PlateConstants {
+  std::array<std::vector<double>, 4> columns;
+  PlateConstants(const Problem<2>& problem, const std::vector<double>& X0, const std::vector<double>& X1) {
+    for (auto& c : columns) c.resize(X0.size());
+    problem.form_body_constants({X0.data(), X1.data()}, X0.size(),
+                                {columns[0].data(), columns[1].data(), columns[2].data(), columns[3].data()});
+  }
+  BodyConstants<2> view() const { return {columns[0].data(), columns[1].data(), columns[2].data(), columns[3].data()}; }
+};
+
+}  // namespace
 
 TEST_CASE("the periodic sine table agrees with libm's sin and cos to round-off", "[body-force]") {
   for (const double L : {1.0, 0.37, 25.0}) {
@@ -60,8 +76,9 @@ TEST_CASE("the plate's body force balances its exact solution", "[body-force]") 
     X0[p] = u(rng);
     X1[p] = u(rng);
   }
+  const PlateConstants constants(*problem, X0, X1);
   for (const double t : {0.003, 0.0125}) {
-    const BodyForce<2> force = problem->body_force(t, {X0.data(), X1.data()});
+    const BodyForce<2> force = problem->body_force(t, constants.view());
     const auto& plate = std::get<PlateBodyForce>(force);
     double worst = 0.0, scale = 0.0;
     for (std::size_t p = 0; p < X0.size(); ++p) {
@@ -97,7 +114,8 @@ TEST_CASE("the plate's body force for a batch of particles equals it particle by
     order[p] = static_cast<unsigned>(p);
   }
   std::shuffle(order.begin(), order.end(), rng);
-  const BodyForce<2> force = problem->body_force(0.007, {X0.data(), X1.data()});
+  const PlateConstants constants(*problem, X0, X1);
+  const BodyForce<2> force = problem->body_force(0.007, constants.view());
   const auto& plate = std::get<PlateBodyForce>(force);
   for (const std::size_t count : {std::size_t{1}, std::size_t{7}, body_force_batch}) {
     std::array<double, 2> batch[body_force_batch];
@@ -119,8 +137,7 @@ TEST_CASE("the body forces' power of a plate run equals its sum particle by part
   for (int n = 0; n < 5; ++n) sim.step();  // the velocities of the run, not only the exact initial ones
   const auto& s = sim.particles();
   const auto problem = make_problem<2>(scene);
-  const BodyForce<2> force =
-      problem->body_force(sim.time(), {s.column(Field::reference, 0).data(), s.column(Field::reference, 1).data()});
+  const BodyForce<2> force = problem->body_force(sim.time(), body_constants_of(s));
   const auto& plate = std::get<PlateBodyForce>(force);
   long double sum = 0, scale = 0;
   for (std::size_t p = 0; p < s.size(); ++p) {
@@ -169,4 +186,30 @@ TEST_CASE("a plate run's errors equal their sums particle by particle", "[body-f
     CHECK(e.velocity_rms == Approx(rms(ev)).epsilon(1e-13));
     CHECK(e.stress_rms == Approx(rms(es)).epsilon(1e-13));
   }
+}
+
+TEST_CASE("the plate's body constants follow their particles through a reordering and a loaded state",
+          "[body-force]") {
+  // the constants are columns of the store (Field::body_constants), permuted with the rest, and formed afresh from X
+  // when a state is loaded: a state (outputs, checkpoints) does not hold them
+  const Scene scene = parse_scene(test::plate_scene(8, 0.05));
+  const double k = 2 * std::numbers::pi / scene.grid.length[0];
+  const auto wrong_constants = [&](const ParticleStore<2>& s) {
+    const BodyConstants<2> c = body_constants_of(s);
+    std::size_t wrong = 0;
+    for (std::size_t p = 0; p < s.size(); ++p)
+      for (int d = 0; d < 2; ++d) {
+        const double kX = k * s.column(Field::reference, d)[p];
+        wrong += c[2 * d][p] != std::sin(kX) || c[2 * d + 1][p] != std::cos(kX);
+      }
+    return wrong;
+  };
+  Simulation<2> sim(scene);
+  sim.step();  // the first step permutes the particles into block order
+  CHECK(wrong_constants(sim.particles()) == 0);
+  const auto names = sim.particles().column_names();
+  CHECK(std::find(names.begin(), names.end(), "body0") == names.end());
+  Simulation<2> resumed(scene);  // its particles in the seeds' order
+  resumed.load_state(sim.save_state());
+  CHECK(wrong_constants(resumed.particles()) == 0);
 }
