@@ -5,6 +5,9 @@
 //
 //   step/<dim>d/<scheme>/n:<N>/threads:<T>     scheme: usl, musl (direct mapping), musl-tls (TLS reconstruction),
 //                                              usl-generic (USL with the Cox–de Boor weights: grid.basis_path generic),
+//                                              usl-ahead, musl-ahead (2D, 1e5 ... 1e7: the last G2P and the next
+//                                              step's P2G in one pass over the particles,
+//                                              Simulation::allow_scatter_ahead),
 //                                              musl-9ppc, musl-tls-9ppc (2D, 3x3 particles per cell, the plate's
 //                                              layout: TLS fits most cells from their own particles there)
 //
@@ -89,6 +92,7 @@ mpm::Simulation<Dim>& simulation(std::int64_t n, const std::string& scheme, long
   if (cache.key != key || !cache.sim || cache.sim->steps_done() + kPeriod + steps > kFreshAfter) {
     cache.sim.reset();  // free the previous one first: 1e7 particles are ~1.3 GB
     cache.sim = std::make_unique<mpm::Simulation<Dim>>(mpm::parse_scene(scene_json(Dim, n, scheme)));
+    cache.sim->allow_scatter_ahead(scheme.ends_with("-ahead"));
     cache.key = key;
   }
   return *cache.sim;
@@ -136,13 +140,15 @@ const bool registered = [] {
   const std::vector<std::int64_t> sizes_1d{1'000, 10'000, 100'000, 1'000'000, 4'000'000};
   const std::vector<std::int64_t> sizes_2d{1'000, 10'000, 100'000, 1'000'000, 10'000'000};
   for (int dim : {1, 2})
-    for (const std::string scheme : {"usl", "musl", "musl-tls", "usl-generic", "musl-9ppc", "musl-tls-9ppc"})
+    for (const std::string scheme :
+         {"usl", "musl", "musl-tls", "usl-generic", "musl-9ppc", "musl-tls-9ppc", "usl-ahead", "musl-ahead"})
       for (std::int64_t n : dim == 1 ? sizes_1d : sizes_2d) {
         if (scheme.starts_with("musl-tls") && n > 1'000'000) continue;  // several direct steps per step
         // the whole-step cost of the generic weights beside the fast path's, and the 9-per-cell pair
         // (2D, 1e5 and 1e6)
         if ((scheme == "usl-generic" || scheme.ends_with("-9ppc")) && (dim == 1 || n < 100'000 || n > 1'000'000))
           continue;
+        if (scheme.ends_with("-ahead") && (dim == 1 || n < 100'000)) continue;  // beside usl and musl
         const std::string name = "step/" + std::to_string(dim) + "d/" + scheme;
         auto fn = dim == 1 ? BM_Step<1> : BM_Step<2>;
         auto* b = benchmark::RegisterBenchmark(name.c_str(), fn, scheme)

@@ -84,6 +84,7 @@ std::vector<unsigned> CellBins<Dim>::cells_by_block() const {
 
 template <int Dim>
 void CellBins<Dim>::bin(const std::array<const double*, Dim>& x, std::size_t count, bool cells_in_block) {
+  order_is_identity_ = false;
   const std::size_t nb = blocks();
   const std::size_t chunks = chunks_for(count), chunk_size = (count + chunks - 1) / chunks;
   key_.resize(count);

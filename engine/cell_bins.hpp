@@ -48,7 +48,11 @@ class CellBins {
   /// After the caller permuted the particles into order(): the order becomes the identity, block ranges stay.
   void adopt_order() {
     for (std::size_t k = 0; k < order_.size(); ++k) order_[k] = static_cast<unsigned>(k);
+    order_is_identity_ = true;
   }
+  /// Whether order() is the identity (from adopt_order to the next bin): a block's range of order() is then the
+  /// range of particle indices itself.
+  bool order_is_identity() const { return order_is_identity_; }
 
   /// The range of order() holding the particles of a block, by its row-major block index (with a block width of
   /// 1: a cell's particles).
@@ -147,6 +151,7 @@ class CellBins {
   std::vector<unsigned> sorted_;        ///< sort_cells_in_blocks' output, swapped with order_
   std::vector<unsigned> counts_;        ///< per chunk and rank (particle indices fit: order_ holds them)
   bool coloured_ = true;                ///< ranks are colour-major (false: single_cells_in_order_of)
+  bool order_is_identity_ = false;
 };
 
 extern template class CellBins<1>;

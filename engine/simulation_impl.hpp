@@ -277,6 +277,9 @@ Simulation<Dim>::Simulation(const Scene& scene)
   }
   pipeline_ = assemble_pipeline<Dim>(scene, problem_->has_body_force(), problem_->has_point_loads(),
                                      gauss_ ? gauss_->name() : nullptr);
+  scatter_ahead_possible_ = (scene.algorithm.update == Update::usl || scene.algorithm.update == Update::musl) &&
+                            !gauss_ && !problem_->has_point_loads() && scene.algorithm.ddmpm_subpoints == 1 &&
+                            !std::holds_alternative<TensorBasis<Dim, StencilCached<MaxEntAxis>>>(basis_);
   // initial stress from F = I is zero for both laws
 }
 
@@ -295,6 +298,7 @@ void Simulation<Dim>::load_state(const SimulationState& st) {
   time_ = st.time;
   conservation_ = st.conservation;
   moved_cells_ = std::numeric_limits<double>::infinity();  // the particles moved: bin them before the next scatter
+  grid_scattered_ahead_ = false;
 }
 
 template <int Dim>
@@ -321,6 +325,13 @@ void Simulation<Dim>::step() {
   // a step that throws has moved the particles by an unknown amount: until it returns, bin before the next scatter
   const double moved_before = moved_cells_;
   moved_cells_ = std::numeric_limits<double>::infinity();
+  // the next step keeps these bins if it does not reorder and the particles move less than the slack left: then
+  // its P2G, scattered ahead in this step's last gather pass, runs in the order its own scatter would
+  // (Step::gather_and_scatter_ahead)
+  const bool next_keeps_order =
+      step_ + 1 < steps_total_ && (step_ + 1) % reorder_every != 0 && bins_.order_is_identity();
+  scatter_ahead_budget_cells_ =
+      scatter_ahead_possible_ && scatter_ahead_allowed_ && next_keeps_order ? bin_slack_cells - moved_before : 0.0;
   cache_stencils(true);
   std::visit([&](const auto& basis, const auto& material,
                  const auto& force) { moved_cells_ = moved_before + step_with(basis, material, force, dt); },
@@ -437,22 +448,33 @@ class Simulation<Dim>::Step {
   /// Thesis Algorithm 1. With `reference`, the basis moves with the body (each particle keeps its place in the
   /// mesh: φ_i at its reference position, ∇φ_i pulled back by F): with the consistent mass, the unified approach
   /// (thesis Algorithm 4); with the velocity from the position increment as well, OTM (Algorithm 3, eq. 4.53).
+  /// Plain USL's gather pass scatters the next step's P2G as well when the next step keeps the bins
+  /// (gather_and_scatter_ahead); the next step then finds it done.
   template <bool reference = false, bool velocity_from_position = false>
   void usl() {
-    sim_.clear_grid(true, true, true);
-    scatter<ScatterFields{.mass = true, .momentum = true, .force = true, .reference = reference}>();
+    constexpr ScatterFields p2g{.mass = true, .momentum = true, .force = true, .reference = reference};
+    constexpr GatherFields g2p{.velocity = !velocity_from_position,
+                               .position = true,
+                               .deformation = true,
+                               .reference = reference,
+                               .velocity_from_position = velocity_from_position};
+    if (!scattered_ahead()) {
+      sim_.clear_grid(true, true, true);
+      scatter<p2g>();
+    }
     accelerations_and_velocities();
-    gather<GatherFields{.velocity = !velocity_from_position,
-                        .position = true,
-                        .deformation = true,
-                        .reference = reference,
-                        .velocity_from_position = velocity_from_position}>("g2p");
+    if constexpr (!reference && !velocity_from_position)
+      if (may_scatter_ahead()) return gather_and_scatter_ahead<g2p, p2g>("g2p");
+    gather<g2p>("g2p");
   }
 
   /// Thesis Algorithm 2.
   void musl() {
-    sim_.clear_grid(true, false, true);
-    scatter<ScatterFields{.mass = true, .momentum = false, .force = true}>();
+    constexpr ScatterFields p2g{.mass = true, .momentum = false, .force = true};
+    if (!scattered_ahead()) {
+      sim_.clear_grid(true, false, true);
+      scatter<p2g>();
+    }
     accelerations();
     sim_.clear_grid(false, true, false);
     if (sim_.gauss_) {
@@ -469,7 +491,9 @@ class Simulation<Dim>::Step {
       sim_.check_momentum(sum_totals(sim_.block_momentum_));
     }
     velocities();
-    gather<GatherFields{.velocity = false, .position = true, .deformation = true}>("g2p-position-deformation");
+    constexpr GatherFields g2p{.velocity = false, .position = true, .deformation = true};
+    if (may_scatter_ahead()) return gather_and_scatter_ahead<g2p, p2g>("g2p-position-deformation");
+    gather<g2p>("g2p-position-deformation");
   }
 
   /// Stress first, from the velocities mapped at the start of the step.
@@ -500,12 +524,9 @@ class Simulation<Dim>::Step {
       gauss.template scatter<Fields, F::active, S>(basis_, gv_);
       if constexpr (Fields.momentum) sim_.check_momentum(totals);
     } else {
-      const unsigned* order = sim_.bins_.order().data();
       sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-        with_active_isa([&](auto isa) {
-          const auto totals = scatter_p2g<Fields, Dim, S, isa>(basis_, pv_, gv_, order, b, e, body_);
-          if constexpr (Fields.momentum) sim_.block_momentum_[block] = totals;
-        });
+        const auto totals = scatter_range<Fields>(b, e, body_);
+        if constexpr (Fields.momentum) sim_.block_momentum_[block] = totals;
       });
       if constexpr (Fields.momentum) sim_.check_momentum(sum_totals(sim_.block_momentum_));
     }
@@ -517,14 +538,83 @@ class Simulation<Dim>::Step {
 
   template <GatherFields Fields>
   void gather(const char* stage) {
-    parallel_over(np_, particle_grain, [&](std::size_t b, std::size_t e) {
-      with_active_isa([&](auto isa) {
-        const auto stress = [&](const double* Fp, double* s) { material_.template stress<Dim, isa>(Fp, s); };
-        gather_g2p<Fields, Dim, S, isa>(basis_, pv_, gv_, b, e, dt_, stress, guard_);
-      });
+    parallel_over(np_, particle_grain, [&](std::size_t b, std::size_t e) { gather_range<Fields>(b, e); });
+    const std::size_t bad = guard_.first_bad.load();
+    if (bad != ParticleGuard::none) sim_.raise_unstable(bad, stage);
+  }
+
+  /// The direct P2G of the particles order[b..e) with the body force `body`; their momentum.
+  template <ScatterFields Fields>
+  MomentumTotals<Dim> scatter_range(std::size_t b, std::size_t e, const F& body) {
+    MomentumTotals<Dim> totals;
+    with_active_isa([&](auto isa) {
+      totals = scatter_p2g<Fields, Dim, S, isa>(basis_, pv_, gv_, sim_.bins_.order().data(), b, e, body);
+    });
+    return totals;
+  }
+
+  /// The G2P of particles [b, e).
+  template <GatherFields Fields>
+  void gather_range(std::size_t b, std::size_t e) {
+    with_active_isa([&](auto isa) {
+      const auto stress = [&](const double* Fp, double* s) { material_.template stress<Dim, isa>(Fp, s); };
+      gather_g2p<Fields, Dim, S, isa>(basis_, pv_, gv_, b, e, dt_, stress, guard_);
+    });
+  }
+
+  /// A bound on the largest move along an axis, in cells, of USL's gather: Δt |Σ_i φ_i v_i,d| / h_d ≤
+  /// Δt max_i |v_i,d| / h_d, since the weights are non-negative and sum to 1 (B-splines, linear, DDMPM); with a
+  /// margin for the round-off of the sum.
+  double max_move_bound() const {
+    const GridState<Dim>& grid = sim_.grid_;
+    const double fastest = tbb::parallel_reduce(
+        tbb::blocked_range<std::size_t>(0, grid.dofs, 4096), 0.0,
+        [&](const tbb::blocked_range<std::size_t>& r, double m) {
+          for (std::size_t i = r.begin(); i < r.end(); ++i)
+            for (int d = 0; d < Dim; ++d) m = std::max(m, std::abs(grid.v[d][i]) * guard_.inv_h[d]);
+          return m;
+        },
+        [](double a, double b) { return std::max(a, b); });
+    return dt_ * fastest * (1 + 1e-9);
+  }
+
+  /// Whether the previous step scattered this step's P2G (gather_and_scatter_ahead); counts it.
+  bool scattered_ahead() {
+    if (!sim_.grid_scattered_ahead_) return false;
+    sim_.grid_scattered_ahead_ = false;
+    ++sim_.steps_scattered_ahead_;
+    return true;
+  }
+
+  /// Whether this step's last gather may scatter the next step's P2G: the next step keeps the bins
+  /// (Simulation::step) if the particles move less than the slack left.
+  bool may_scatter_ahead() const {
+    return sim_.scatter_ahead_budget_cells_ > 0 && max_move_bound() < sim_.scatter_ahead_budget_cells_;
+  }
+
+  /// The step's last G2P (fields G) and the next step's P2G (fields P) in one pass over the particles (USL: its
+  /// only G2P; MUSL: the position and deformation update). Block after block of the coloured bins, the block's
+  /// particles are gathered (reading the grid's v and a) and then, while they are in cache, scattered into the
+  /// emptied grid fields of P with the body force at the next step's time: the particle columns stream from memory
+  /// once instead of twice. The next step keeps these bins (Simulation::step: no reordering, the order the
+  /// identity, so a block's range of the order is its range of particles, and a move within the slack left), so
+  /// its own scatter would form the same sums in the same order: the results are the same to the bit, and so are
+  /// the guards and the conservation checks, which run here for the next step.
+  template <GatherFields G, ScatterFields P>
+  void gather_and_scatter_ahead(const char* stage) {
+    const double t_next = sim_.dt_ * (sim_.step_ + 1);
+    const F body_next = std::get<F>(sim_.problem_->body_force(t_next, body_constants_of(sim_.store_)));
+    sim_.clear_grid(P.mass, P.momentum, P.force);
+    sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
+      gather_range<G>(b, e);
+      const auto totals = scatter_range<P>(b, e, body_next);
+      if constexpr (P.momentum) sim_.block_momentum_[block] = totals;
     });
     const std::size_t bad = guard_.first_bad.load();
     if (bad != ParticleGuard::none) sim_.raise_unstable(bad, stage);
+    if constexpr (P.momentum) sim_.check_momentum(sum_totals(sim_.block_momentum_));
+    if constexpr (P.mass) sim_.check_mass();
+    sim_.grid_scattered_ahead_ = true;
   }
 
   /// Empty and fixed DOFs get no acceleration and no velocity.
