@@ -448,8 +448,8 @@ class Simulation<Dim>::Step {
   /// Thesis Algorithm 1. With `reference`, the basis moves with the body (each particle keeps its place in the
   /// mesh: φ_i at its reference position, ∇φ_i pulled back by F): with the consistent mass, the unified approach
   /// (thesis Algorithm 4); with the velocity from the position increment as well, OTM (Algorithm 3, eq. 4.53).
-  /// Plain USL's gather pass scatters the next step's P2G as well when the next step keeps the bins
-  /// (gather_and_scatter_ahead); the next step then finds it done.
+  /// With allow_scatter_ahead, plain USL's gather pass scatters the next step's P2G as well when the next step
+  /// keeps the bins (gather_and_scatter_ahead); the next step then finds it done.
   template <bool reference = false, bool velocity_from_position = false>
   void usl() {
     constexpr ScatterFields p2g{.mass = true, .momentum = true, .force = true, .reference = reference};
@@ -562,7 +562,7 @@ class Simulation<Dim>::Step {
     });
   }
 
-  /// A bound on the largest move along an axis, in cells, of USL's gather: Δt |Σ_i φ_i v_i,d| / h_d ≤
+  /// A bound on the largest move along an axis, in cells, of the step's last gather: Δt |Σ_i φ_i v_i,d| / h_d ≤
   /// Δt max_i |v_i,d| / h_d, since the weights are non-negative and sum to 1 (B-splines, linear, DDMPM); with a
   /// margin for the round-off of the sum.
   double max_move_bound() const {
