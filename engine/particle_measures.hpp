@@ -297,8 +297,6 @@ double body_force_power(const ParticleStore<Dim>& s, const Problem<Dim>& problem
       problem.body_force(t, body_constants_of(s)));
 }
 
-
-
 /// A copy of every particle column with the clock and the conservation maxima.
 template <int Dim>
 SimulationState save_particle_state(const ParticleStore<Dim>& s, long step, double time, const Conservation& c) {
