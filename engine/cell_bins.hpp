@@ -70,19 +70,27 @@ class CellBins {
   /// colour, blocks of one colour in parallel. Block indices run over [0, blocks()).
   template <class F>
   void for_each_block_coloured(F&& f) const {
-    if (!coloured_) throw std::logic_error("CellBins: these bins have no colour classes");
-    for (int c = 0; c < (1 << Dim); ++c)
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(colour_begin_[c], colour_begin_[c + 1], 1),
-                        [&](const tbb::blocked_range<std::size_t>& r) {
-                          for (std::size_t b = r.begin(); b < r.end(); ++b) {
-                            if (block_begin_[b] == block_begin_[b + 1]) continue;
-                            if constexpr (std::is_invocable_v<F, std::size_t, std::size_t, std::size_t>)
-                              f(b, block_begin_[b], block_begin_[b + 1]);
-                            else
-                              f(block_begin_[b], block_begin_[b + 1]);
-                          }
-                        });
+    for_each_colour(1, tbb::auto_partitioner(), [&](std::size_t first, std::size_t last) {
+      for (std::size_t b = first; b < last; ++b) {
+        if (block_begin_[b] == block_begin_[b + 1]) continue;
+        if constexpr (std::is_invocable_v<F, std::size_t, std::size_t, std::size_t>)
+          f(b, block_begin_[b], block_begin_[b + 1]);
+        else
+          f(block_begin_[b], block_begin_[b + 1]);
+      }
+    });
   }
+
+  /// Calls f(first, last) for runs [first, last) of at most `run_blocks` consecutive block indices of one colour,
+  /// colour after colour, the runs of one colour in parallel. A run's blocks lie back to back in order(): from
+  /// block_begin(first) to block_begin(last).
+  template <class F>
+  void for_each_block_run_coloured(std::size_t run_blocks, F&& f) const {
+    for_each_colour(std::max<std::size_t>(run_blocks, 1), tbb::simple_partitioner(), f);
+  }
+
+  /// Where the range of order() of the block with index `block` begins; block_begin(blocks()) is its end.
+  std::size_t block_begin(std::size_t block) const { return block_begin_[block]; }
 
   /// Calls f(cell) for every cell (row-major index), blocks in parallel in their rank order, the cells of a block
   /// one after another: the order in which the particle columns lie after a reordering by these bins, so per-cell
@@ -113,6 +121,17 @@ class CellBins {
   }
 
  private:
+  /// f(first, last) over ranges of block indices, colour after colour, the blocks of one colour in parallel,
+  /// split by `partitioner` down to `grain` blocks.
+  template <class Partitioner, class F>
+  void for_each_colour(std::size_t grain, Partitioner partitioner, F&& f) const {
+    if (!coloured_) throw std::logic_error("CellBins: these bins have no colour classes");
+    for (int c = 0; c < (1 << Dim); ++c)
+      tbb::parallel_for(
+          tbb::blocked_range<std::size_t>(colour_begin_[c], colour_begin_[c + 1], grain),
+          [&](const tbb::blocked_range<std::size_t>& r) { f(r.begin(), r.end()); }, partitioner);
+  }
+
   /// f(cell) for the cells of a block (row-major block index), row-major.
   template <class F>
   void for_each_cell_of_block(std::size_t block, F&& f) const {

@@ -592,23 +592,36 @@ class Simulation<Dim>::Step {
     return sim_.scatter_ahead_budget_cells_ > 0 && max_move_bound() < sim_.scatter_ahead_budget_cells_;
   }
 
+  /// About how many particles gather_and_scatter_ahead gathers before it scatters them: runs of that many fill the
+  /// gather's batches (a block holds ≈ 100 at 2×2 per cell), still fit a core's L2 cache (≈ 100 bytes each) and
+  /// leave dozens of runs per colour at 1e6 particles. Runs of 4096 and 8192 measured alike, 16384 slower and
+  /// single blocks slower still (docs/PERFORMANCE.md).
+  static constexpr std::size_t scatter_ahead_run_particles = 4096;
+
   /// The step's last G2P (fields G) and the next step's P2G (fields P) in one pass over the particles (USL: its
-  /// only G2P; MUSL: the position and deformation update). Block after block of the coloured bins, the block's
-  /// particles are gathered (reading the grid's v and a) and then, while they are in cache, scattered into the
-  /// emptied grid fields of P with the body force at the next step's time: the particle columns stream from memory
-  /// once instead of twice. The next step keeps these bins (Simulation::step: no reordering, the order the
-  /// identity, so a block's range of the order is its range of particles, and a move within the slack left), so
-  /// its own scatter would form the same sums in the same order: the results are the same to the bit, and so are
-  /// the guards and the conservation checks, which run here for the next step.
+  /// only G2P; MUSL: the position and deformation update). Run after run of blocks of one colour of the coloured
+  /// bins, the run's particles are gathered (reading the grid's v and a) and then, while they are in cache,
+  /// scattered block by block into the emptied grid fields of P with the body force at the next step's time: the
+  /// particle columns stream from memory once instead of twice. The next step keeps these bins
+  /// (Simulation::step: no reordering, the order the identity, so a block's range of the order is its range of
+  /// particles, and a move within the slack left), so its own scatter would form the same sums in the same order:
+  /// the results are the same to the bit, and so are the guards and the conservation checks, which run here for
+  /// the next step.
   template <GatherFields G, ScatterFields P>
   void gather_and_scatter_ahead(const char* stage) {
     const double t_next = sim_.dt_ * (sim_.step_ + 1);
     const F body_next = std::get<F>(sim_.problem_->body_force(t_next, body_constants_of(sim_.store_)));
     sim_.clear_grid(P.mass, P.momentum, P.force);
-    sim_.bins_.for_each_block_coloured([&](std::size_t block, std::size_t b, std::size_t e) {
-      gather_range<G>(b, e);
-      const auto totals = scatter_range<P>(b, e, body_next);
-      if constexpr (P.momentum) sim_.block_momentum_[block] = totals;
+    const CellBins<Dim>& bins = sim_.bins_;
+    const std::size_t run_blocks = scatter_ahead_run_particles * bins.blocks() / std::max<std::size_t>(np_, 1);
+    bins.for_each_block_run_coloured(run_blocks, [&](std::size_t first, std::size_t last) {
+      gather_range<G>(bins.block_begin(first), bins.block_begin(last));
+      for (std::size_t block = first; block < last; ++block) {
+        const std::size_t b = bins.block_begin(block), e = bins.block_begin(block + 1);
+        if (b == e) continue;
+        const auto totals = scatter_range<P>(b, e, body_next);
+        if constexpr (P.momentum) sim_.block_momentum_[block] = totals;
+      }
     });
     const std::size_t bad = guard_.first_bad.load();
     if (bad != ParticleGuard::none) sim_.raise_unstable(bad, stage);
