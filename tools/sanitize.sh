@@ -117,9 +117,12 @@ run_tsan() {
   # CMake links with a RUNPATH, which yields to LD_LIBRARY_PATH: a caller's LD_LIBRARY_PATH naming the directory of
   # Debian's libtbb loads the uninstrumented library, so the instrumented one's directory goes first
   local -x LD_LIBRARY_PATH="$tbb/lib${LD_LIBRARY_PATH:+:$LD_LIBRARY_PATH}"
-  if ! ldd "$root/build-tsan/tests/mpm_tests" | grep -q "$tbb/lib/libtbb"; then
+  # ldd's output is captured first: under pipefail, `ldd | grep -q` fails whenever grep exits at its first match
+  # before ldd has written everything (SIGPIPE); and grep -F, since the path holds "clang++".
+  local libs; libs=$(ldd "$root/build-tsan/tests/mpm_tests") || { log "tsan: ldd mpm_tests failed"; return 1; }
+  if ! grep -qF "$tbb/lib/libtbb" <<<"$libs"; then
     log "tsan: mpm_tests does not load the instrumented libtbb from $tbb:"
-    ldd "$root/build-tsan/tests/mpm_tests" | grep -i tbb >&2
+    grep -i tbb <<<"$libs" >&2
     return 1
   fi
   local supp="$root/tools/tsan.supp"
