@@ -71,13 +71,12 @@ class CellBins {
   template <class F>
   void for_each_block_coloured(F&& f) const {
     for_each_colour(1, tbb::auto_partitioner(), [&](std::size_t first, std::size_t last) {
-      for (std::size_t b = first; b < last; ++b) {
-        if (block_begin_[b] == block_begin_[b + 1]) continue;
+      for_each_nonempty_block(first, last, [&](std::size_t block, std::size_t begin, std::size_t end) {
         if constexpr (std::is_invocable_v<F, std::size_t, std::size_t, std::size_t>)
-          f(b, block_begin_[b], block_begin_[b + 1]);
+          f(block, begin, end);
         else
-          f(block_begin_[b], block_begin_[b + 1]);
-      }
+          f(begin, end);
+      });
     });
   }
 
@@ -91,6 +90,14 @@ class CellBins {
 
   /// Where the range of order() of the block with index `block` begins; block_begin(blocks()) is its end.
   std::size_t block_begin(std::size_t block) const { return block_begin_[block]; }
+
+  /// Calls f(block, begin, end) for the non-empty blocks among block indices [first, last), in index order, with
+  /// each block's range of order() (for the blocks of a run of for_each_block_run_coloured).
+  template <class F>
+  void for_each_nonempty_block(std::size_t first, std::size_t last, F&& f) const {
+    for (std::size_t b = first; b < last; ++b)
+      if (block_begin_[b] < block_begin_[b + 1]) f(b, block_begin_[b], block_begin_[b + 1]);
+  }
 
   /// Calls f(cell) for every cell (row-major index), blocks in parallel in their rank order, the cells of a block
   /// one after another: the order in which the particle columns lie after a reordering by these bins, so per-cell
@@ -116,8 +123,7 @@ class CellBins {
   /// Calls f(begin, end) for every block's range in a fixed serial order (the reference for the scatter).
   template <class F>
   void for_each_block_serial(F&& f) const {
-    for (std::size_t b = 0; b + 1 < block_begin_.size(); ++b)
-      if (block_begin_[b] < block_begin_[b + 1]) f(block_begin_[b], block_begin_[b + 1]);
+    for_each_nonempty_block(0, blocks(), [&](std::size_t, std::size_t begin, std::size_t end) { f(begin, end); });
   }
 
  private:

@@ -616,12 +616,10 @@ class Simulation<Dim>::Step {
     const std::size_t run_blocks = scatter_ahead_run_particles * bins.blocks() / std::max<std::size_t>(np_, 1);
     bins.for_each_block_run_coloured(run_blocks, [&](std::size_t first, std::size_t last) {
       gather_range<G>(bins.block_begin(first), bins.block_begin(last));
-      for (std::size_t block = first; block < last; ++block) {
-        const std::size_t b = bins.block_begin(block), e = bins.block_begin(block + 1);
-        if (b == e) continue;
+      bins.for_each_nonempty_block(first, last, [&](std::size_t block, std::size_t b, std::size_t e) {
         const auto totals = scatter_range<P>(b, e, body_next);
         if constexpr (P.momentum) sim_.block_momentum_[block] = totals;
-      }
+      });
     });
     const std::size_t bad = guard_.first_bad.load();
     if (bad != ParticleGuard::none) sim_.raise_unstable(bad, stage);
