@@ -105,9 +105,11 @@ class Simulation {
  private:
   template <class B, class M, class F>
   class Step;
-  /// Returns the largest distance a particle moved along an axis, in cells.
+  /// Returns the largest distance a particle moved along an axis, in cells. `scatter_ahead_budget_cells`: the
+  /// cells the particles may still move in this step for the next to keep the bins, if its P2G may be scattered
+  /// ahead (Step::gather_and_scatter_ahead); 0 if not.
   template <class B, class M, class F>
-  double step_with(const B& basis, const M& material, const F& body, double dt);
+  double step_with(const B& basis, const M& material, const F& body, double dt, double scatter_ahead_budget_cells);
   void clear_grid(bool mass, bool momentum, bool force);
   void check_mass();
   void check_momentum(const MomentumTotals<Dim>& particles);
@@ -137,10 +139,8 @@ class Simulation {
   long step_ = 0, steps_total_ = 0;
   double moved_cells_ = std::numeric_limits<double>::infinity();  ///< bound on any particle's move since binning
   /// USL and MUSL: whether the run's step may scatter ahead (a direct mapping, no point loads, no DDMPM sub-points,
-  /// no cached max-ent stencils) and the user allows it; the cells the particles may still move in this step for
-  /// the next to keep the bins, if it may (0 if not); whether the grid holds the next step's P2G.
+  /// no cached max-ent stencils) and the user allows it; whether the grid holds the next step's P2G.
   bool scatter_ahead_possible_ = false, scatter_ahead_allowed_ = false;
-  double scatter_ahead_budget_cells_ = 0.0;
   bool grid_scattered_ahead_ = false;
   long steps_scattered_ahead_ = 0;
   int cg_iterations_ = 0;

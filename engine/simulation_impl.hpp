@@ -330,12 +330,14 @@ void Simulation<Dim>::step() {
   // (Step::gather_and_scatter_ahead)
   const bool next_keeps_order =
       step_ + 1 < steps_total_ && (step_ + 1) % reorder_every != 0 && bins_.order_is_identity();
-  scatter_ahead_budget_cells_ =
+  const double scatter_ahead_budget_cells =
       scatter_ahead_possible_ && scatter_ahead_allowed_ && next_keeps_order ? bin_slack_cells - moved_before : 0.0;
   cache_stencils(true);
-  std::visit([&](const auto& basis, const auto& material,
-                 const auto& force) { moved_cells_ = moved_before + step_with(basis, material, force, dt); },
-             basis_, material_, body);
+  std::visit(
+      [&](const auto& basis, const auto& material, const auto& force) {
+        moved_cells_ = moved_before + step_with(basis, material, force, dt, scatter_ahead_budget_cells);
+      },
+      basis_, material_, body);
   cache_stencils(false);
   ++step_;
   time_ = step_ == steps_total_ ? scene_.time.end : dt_ * step_;
@@ -427,9 +429,10 @@ class Simulation<Dim>::Step {
  public:
   static constexpr int S = B::width;
 
-  Step(Simulation& sim, const B& basis, const M& material, const F& body, double dt)
-      : sim_(sim), basis_(basis), material_(material), body_(body), dt_(dt), pv_(sim.store_.view()),
-        gv_(sim.grid_.view()), np_(sim.store_.size()) {
+  Step(Simulation& sim, const B& basis, const M& material, const F& body, double dt, double scatter_ahead_budget_cells)
+      : sim_(sim), basis_(basis), material_(material), body_(body), dt_(dt),
+        scatter_ahead_budget_cells_(scatter_ahead_budget_cells), pv_(sim.store_.view()), gv_(sim.grid_.view()),
+        np_(sim.store_.size()) {
     for (int d = 0; d < Dim; ++d) {
       guard_.hi[d] = sim.scene_.grid.length[d];
       guard_.inv_h[d] = sim.scene_.grid.cells[d] / sim.scene_.grid.length[d];
@@ -589,7 +592,7 @@ class Simulation<Dim>::Step {
   /// Whether this step's last gather may scatter the next step's P2G: the next step keeps the bins
   /// (Simulation::step) if the particles move less than the slack left.
   bool may_scatter_ahead() const {
-    return sim_.scatter_ahead_budget_cells_ > 0 && max_move_bound() < sim_.scatter_ahead_budget_cells_;
+    return scatter_ahead_budget_cells_ > 0 && max_move_bound() < scatter_ahead_budget_cells_;
   }
 
   /// About how many particles gather_and_scatter_ahead gathers before it scatters them: runs of that many fill the
@@ -699,6 +702,8 @@ class Simulation<Dim>::Step {
   const M& material_;
   const F& body_;
   const double dt_;
+  /// the cells the particles may still move in this step for the next to keep the bins (may_scatter_ahead)
+  const double scatter_ahead_budget_cells_;
   const ParticleView<Dim> pv_;
   const GridView<Dim> gv_;
   const std::size_t np_;
@@ -708,9 +713,10 @@ class Simulation<Dim>::Step {
 
 template <int Dim>
 template <class B, class M, class F>
-double Simulation<Dim>::step_with(const B& basis, const M& material, const F& body, double dt) {
+double Simulation<Dim>::step_with(const B& basis, const M& material, const F& body, double dt,
+                                  double scatter_ahead_budget_cells) {
   cg_iterations_ = 0;
-  Step<B, M, F> step(*this, basis, material, body, dt);
+  Step<B, M, F> step(*this, basis, material, body, dt, scatter_ahead_budget_cells);
   switch (scene_.algorithm.update) {
     case Update::usl: step.usl(); break;
     case Update::musl: step.musl(); break;
