@@ -4,16 +4,30 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <new>
 #include <span>
 #include <string>
 #include <vector>
 
-#include "engine/column_allocator.hpp"
 #include "kernels/views.hpp"
 
 namespace mpm {
 
-using Column = std::vector<double, ColumnAllocator<double>>;
+/// 64-byte aligned allocator: columns start on a cache line, so vector loads never split one.
+template <class T>
+struct AlignedAllocator {
+  using value_type = T;
+  static constexpr std::align_val_t alignment{64};
+  AlignedAllocator() = default;
+  template <class U>
+  AlignedAllocator(const AlignedAllocator<U>&) {}
+  T* allocate(std::size_t n) { return static_cast<T*>(::operator new(n * sizeof(T), alignment)); }
+  void deallocate(T* p, std::size_t) { ::operator delete(p, alignment); }
+  template <class U>
+  bool operator==(const AlignedAllocator<U>&) const { return true; }
+};
+
+using Column = std::vector<double, AlignedAllocator<double>>;
 
 /// The particle fields a pipeline may need; each has one column per component. body_constants are what a body
 /// force takes from the fixed reference position, formed once from it (Problem::form_body_constants; the plate's
