@@ -82,7 +82,8 @@ fi
 {
   echo "date=$(date -u +%Y-%m-%dT%H:%M:%SZ)"
   echo "built=$(for p in "${programs[@]}"; do stat -c "$p %y" "$build/bench/$p" | cut -d. -f1; done | paste -sd, -)"
-  echo "cpu=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1)"
+  # a virtual machine's model name can be as bare as "AMD EPYC": family and model tell the generation apart
+  echo "cpu=$(sed -n 's/^model name[[:space:]]*: //p' /proc/cpuinfo | head -1) (family $(sed -n 's/^cpu family[[:space:]]*: //p' /proc/cpuinfo | head -1), model $(sed -n 's/^model[[:space:]]*: //p' /proc/cpuinfo | head -1))"
   echo "nproc=$(nproc)"
   echo "compiler=$("$cxx" --version | head -1)"
   echo "cxx_flags_release=$(sed -n 's/^CMAKE_CXX_FLAGS_RELEASE:[A-Z]*=//p' "$build/CMakeCache.txt")"
