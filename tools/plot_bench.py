@@ -465,6 +465,8 @@ def section_stream(lines, res):
 
 
 def plot(res, png):
+    """Throughput against particle count: one panel per dimension, a colour per scheme, solid lines for 2 threads
+    and dashed for 1, each panel's legend beneath it (one plot of every series hid lines under the legend)."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -475,26 +477,27 @@ def plot(res, png):
     series = {}
     for (dim, scheme, n, t), e in rows.items():
         series.setdefault((dim, scheme, t), []).append((e.get("particles", n), e["particle_steps_per_s"]))
-    fig, ax = plt.subplots(figsize=(8, 5.5))
-    colours = {("1d", "usl"): "tab:blue", ("1d", "musl"): "tab:cyan", ("1d", "musl-tls"): "tab:purple",
-               ("2d", "usl"): "tab:red", ("2d", "musl"): "tab:orange", ("2d", "musl-tls"): "tab:brown",
-               ("2d", "usl-generic"): "tab:gray", ("2d", "musl-9ppc"): "tab:olive",
-               ("2d", "musl-tls-9ppc"): "tab:pink"}
-    for key in sorted(series, key=lambda k: (k[0], k[1] != "usl", k[2])):
-        dim, scheme, t = key
-        pts = sorted(series[key])
-        ax.plot([p[0] for p in pts], [p[1] / 1e6 for p in pts], marker="o" if t == 1 else "s",
-                linestyle="-" if t == 2 else "--", color=colours.get((dim, scheme), None),
-                label=f"{dim.upper()} {scheme.upper()}, {t} thread{'s' if t > 1 else ''}")
-    ax.set_xscale("log")
-    ax.set_xlabel("particles")
-    ax.set_ylabel("particle-steps / s  (millions)")
-    ax.set_title("Simulation::step() throughput (quadratic B-spline, fast path, neo-Hookean)")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.set_ylim(bottom=0)
-    ax.legend(fontsize=8, ncol=2)
+    dims = sorted({k[0] for k in series})
+    fig, axes = plt.subplots(1, len(dims), figsize=(6 * len(dims), 6.5), sharey=True, squeeze=False)
+    palette = plt.get_cmap("tab10").colors
+    for ax, dim in zip(axes[0], dims):
+        schemes = sorted({k[1] for k in series if k[0] == dim}, key=lambda s: (s != "usl", s != "musl", s))
+        for key in sorted((k for k in series if k[0] == dim), key=lambda k: (schemes.index(k[1]), -k[2])):
+            _, scheme, t = key
+            pts = sorted(series[key])
+            ax.plot([p[0] for p in pts], [p[1] / 1e6 for p in pts], marker="s" if t > 1 else "o",
+                    linestyle="-" if t > 1 else "--", color=palette[schemes.index(scheme) % len(palette)],
+                    label=f"{scheme.upper()}, {t} thread{'s' if t > 1 else ''}")
+        ax.set_xscale("log")
+        ax.set_xlabel("particles")
+        ax.set_title(f"{dim.upper()}")
+        ax.grid(True, which="both", alpha=0.3)
+        ax.legend(fontsize=8, ncol=2, loc="upper center", bbox_to_anchor=(0.5, -0.12))
+    axes[0][0].set_ylabel("particle-steps / s  (millions)")
+    axes[0][0].set_ylim(bottom=0)
+    fig.suptitle("Simulation::step() throughput (quadratic B-splines, fast path unless GENERIC, neo-Hookean)")
     fig.tight_layout()
-    fig.savefig(png, dpi=120)
+    fig.savefig(png, dpi=110)
     plt.close(fig)
     return True
 
