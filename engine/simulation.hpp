@@ -105,11 +105,13 @@ class Simulation {
  private:
   template <class B, class M, class F>
   class Step;
-  /// Returns the largest distance a particle moved along an axis, in cells. `scatter_ahead_budget_cells`: the
-  /// cells the particles may still move in this step for the next to keep the bins, if its P2G may be scattered
-  /// ahead (Step::gather_and_scatter_ahead); 0 if not.
-  template <class B, class M, class F>
-  double step_with(const B& basis, const M& material, const F& body, double dt, double scatter_ahead_budget_cells);
+  /// The step with one basis, for the run's material and body force; returns the largest distance a particle moved
+  /// along an axis, in cells. `scatter_ahead_budget_cells`: the cells the particles may still move in this step for
+  /// the next to keep the bins, if its P2G may be scattered ahead (Step::gather_and_scatter_ahead); 0 if not.
+  /// Instantiated per basis, so that the bases' kernels can compile in separate translation units
+  /// (simulation_2d.cpp, simulation_2d_generic.cpp).
+  template <class B>
+  double step_with(const B& basis, const BodyForce<Dim>& body, double dt, double scatter_ahead_budget_cells);
   void clear_grid(bool mass, bool momentum, bool force);
   void check_mass();
   void check_momentum(const MomentumTotals<Dim>& particles);

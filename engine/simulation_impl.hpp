@@ -1,7 +1,7 @@
 #pragma once
-// The definitions of Simulation<Dim>, included by simulation_1d.cpp and simulation_2d.cpp, which instantiate one
-// dimension each: every combination of basis, material and body force instantiates the step kernels, and in one
-// translation unit both dimensions took 3 min to compile (10 GB of memory under AddressSanitizer); split, the two
+// The definitions of Simulation<Dim>, included by simulation_1d.cpp, simulation_2d.cpp and simulation_2d_generic.cpp,
+// which instantiate one dimension, or one group of 2D bases, each: every combination of basis, material and body
+// force instantiates the step kernels (three instruction-set copies in the portable build), and split, the units
 // compile in parallel. Not a public header.
 #include "engine/simulation.hpp"
 
@@ -334,10 +334,10 @@ void Simulation<Dim>::step() {
       scatter_ahead_possible_ && scatter_ahead_allowed_ && next_keeps_order ? bin_slack_cells - moved_before : 0.0;
   cache_stencils(true);
   std::visit(
-      [&](const auto& basis, const auto& material, const auto& force) {
-        moved_cells_ = moved_before + step_with(basis, material, force, dt, scatter_ahead_budget_cells);
+      [&](const auto& basis) {
+        moved_cells_ = moved_before + step_with(basis, body, dt, scatter_ahead_budget_cells);
       },
-      basis_, material_, body);
+      basis_);
   cache_stencils(false);
   ++step_;
   time_ = step_ == steps_total_ ? scene_.time.end : dt_ * step_;
@@ -712,20 +712,38 @@ class Simulation<Dim>::Step {
 };
 
 template <int Dim>
-template <class B, class M, class F>
-double Simulation<Dim>::step_with(const B& basis, const M& material, const F& body, double dt,
+template <class B>
+double Simulation<Dim>::step_with(const B& basis, const BodyForce<Dim>& body, double dt,
                                   double scatter_ahead_budget_cells) {
-  cg_iterations_ = 0;
-  Step<B, M, F> step(*this, basis, material, body, dt, scatter_ahead_budget_cells);
-  switch (scene_.algorithm.update) {
-    case Update::usl: step.usl(); break;
-    case Update::musl: step.musl(); break;
-    case Update::usf: step.usf(); break;
-    case Update::unified: step.template usl<true>(); break;
-    case Update::otm: step.template usl<true, true>(); break;
-  }
-  return step.max_move();
+  return std::visit(
+      [&](const auto& material, const auto& force) {
+        cg_iterations_ = 0;
+        Step<B, std::decay_t<decltype(material)>, std::decay_t<decltype(force)>> step(*this, basis, material, force,
+                                                                                      dt, scatter_ahead_budget_cells);
+        switch (scene_.algorithm.update) {
+          case Update::usl: step.usl(); break;
+          case Update::musl: step.musl(); break;
+          case Update::usf: step.usf(); break;
+          case Update::unified: step.template usl<true>(); break;
+          case Update::otm: step.template usl<true, true>(); break;
+        }
+        return step.max_move();
+      },
+      material_, body);
 }
+
+/// The step of basis I of AnyBasis<Dim> (Simulation::step_with), for an explicit instantiation; with `extern` in
+/// front, its declaration.
+#define MPM_STEP_OF_BASIS(Dim, I)                                                               \
+  template double Simulation<Dim>::step_with(const std::variant_alternative_t<I, AnyBasis<Dim>>&, \
+                                             const BodyForce<Dim>&, double, double)
+/// The 2D steps simulation_2d_generic.cpp compiles, those of the Cox–de Boor and max-ent bases; simulation_2d.cpp
+/// compiles the rest, so that the two halves of the 2D kernels build in parallel. `prefix`: empty or extern.
+#define MPM_GENERIC_STEPS_2D(prefix)                                                                              \
+  prefix MPM_STEP_OF_BASIS(2, 2);                                                                                 \
+  prefix MPM_STEP_OF_BASIS(2, 3);                                                                                 \
+  prefix MPM_STEP_OF_BASIS(2, 4);                                                                                 \
+  prefix MPM_STEP_OF_BASIS(2, 6)
 
 template <int Dim>
 RunErrors Simulation<Dim>::errors() const {
