@@ -161,7 +161,7 @@ CriticalStep MeshSimulation::critical_step() const {
 }
 
 void MeshSimulation::load_state(const SimulationState& state) {
-  load_particle_columns(store_, state);
+  load_particle_columns(store_, state, *problem_);
   step_ = state.step;
   time_ = state.time;
   conservation_ = state.conservation;

@@ -248,20 +248,23 @@ std::array<const double*, Dim> reference_columns_of(const ParticleStore<Dim>& s)
   return X;
 }
 
-/// The body force's constants, or nulls if the store has none.
+/// The body force's constant columns, or nulls if the store has none.
 template <int Dim>
 BodyConstants<Dim> body_constants_of(const ParticleStore<Dim>& s) {
-  if (!s.has(Field::body_constants)) return {};
-  return {s.column(Field::body_constants).data(), &s.reference_axes()};
+  BodyConstants<Dim> c{};
+  if (s.has(Field::body_constants))
+    for (int k = 0; k < 2 * Dim; ++k) c[k] = s.column(Field::body_constants, k).data();
+  return c;
 }
 
 /// Forms the body force's constants from the reference positions, if the store keeps them: after seeding and after
 /// loading a state, which does not hold them.
 template <int Dim>
-void form_body_constants(ParticleStore<Dim>& s) {
-  if (s.has(Field::body_constants))
-    rank_reference_axes<Dim>(reference_columns_of(s), s.size(), s.column(Field::body_constants).data(),
-                             s.reference_axes());
+void form_body_constants(ParticleStore<Dim>& s, const Problem<Dim>& problem) {
+  if (!s.has(Field::body_constants)) return;
+  std::array<double*, 2 * Dim> out;
+  for (int k = 0; k < 2 * Dim; ++k) out[k] = s.column(Field::body_constants, k).data();
+  problem.form_body_constants(reference_columns_of(s), s.size(), out);
 }
 
 /// Power of the body forces on the particles, Σ_p m_p b_p(t)·v_p, W.
@@ -312,7 +315,7 @@ SimulationState save_particle_state(const ParticleStore<Dim>& s, long step, doub
 /// Copies a state's columns into the store, matched by name (a file may list them in another order), and forms the
 /// body force's constants from them; throws std::invalid_argument if one is missing or has another particle count.
 template <int Dim>
-void load_particle_columns(ParticleStore<Dim>& s, const SimulationState& st) {
+void load_particle_columns(ParticleStore<Dim>& s, const SimulationState& st, const Problem<Dim>& problem) {
   const auto names = s.column_names();
   std::vector<std::size_t> source(names.size());
   for (std::size_t k = 0; k < names.size(); ++k) {
@@ -325,7 +328,7 @@ void load_particle_columns(ParticleStore<Dim>& s, const SimulationState& st) {
   }
   for (std::size_t k = 0; k < names.size(); ++k)
     std::copy(st.columns[source[k]].begin(), st.columns[source[k]].end(), s.column(names[k]).begin());
-  form_body_constants(s);
+  form_body_constants(s, problem);
 }
 
 /// Throws UnstableRun naming the step, stage, particle, its position, J and velocity, and what went wrong
@@ -424,7 +427,7 @@ ParticleStore<Dim> store_from_seeds(const Seeds<Dim>& seeds, const Problem<Dim>&
     store.column(Field::mass)[p] = seeds.m[p];
     store.column(Field::volume0)[p] = seeds.V0[p];
   }
-  form_body_constants(store);
+  form_body_constants(store, problem);
   return store;
 }
 

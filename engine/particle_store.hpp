@@ -9,7 +9,6 @@
 #include <string>
 #include <vector>
 
-#include "engine/reference_axes.hpp"
 #include "kernels/views.hpp"
 
 namespace mpm {
@@ -31,9 +30,8 @@ struct AlignedAllocator {
 using Column = std::vector<double, AlignedAllocator<double>>;
 
 /// The particle fields a pipeline may need; each has one column per component. body_constants are what a body
-/// force takes from the fixed reference position, formed once from it: the particle's ranks among the distinct
-/// reference coordinates of each axis (rank_reference_axes), packed in one column; derived, so not part of the state
-/// (column_names) that outputs and checkpoints hold.
+/// force takes from the fixed reference position, formed once from it (Problem::form_body_constants; the plate's
+/// sin k X_d and cos k X_d): derived, so not part of the state (column_names) that outputs and checkpoints hold.
 enum class Field : std::uint8_t {
   position, reference, velocity, deformation, stress, mass, volume0, body_constants, count
 };
@@ -46,6 +44,7 @@ constexpr int components(Field f) {
     case Field::velocity: return Dim;
     case Field::deformation: return Dim * Dim;
     case Field::stress: return sym_components<Dim>;
+    case Field::body_constants: return 2 * Dim;
     default: return 1;
   }
 }
@@ -84,16 +83,11 @@ class ParticleStore {
   /// Applies new[k] = old[order[k]] to every column.
   void permute(std::span<const unsigned> order);
 
-  /// The distinct reference coordinates that the body_constants rank: formed with them, and not permuted.
-  ReferenceAxes<Dim>& reference_axes() { return axes_; }
-  const ReferenceAxes<Dim>& reference_axes() const { return axes_; }
-
  private:
   std::size_t count_;
   FieldSet fields_;
   std::array<std::vector<Column>, static_cast<int>(Field::count)> columns_;
   Column scratch_;
-  ReferenceAxes<Dim> axes_;
 };
 
 extern template class ParticleStore<1>;

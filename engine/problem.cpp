@@ -2,10 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
-#include <memory>
 #include <stdexcept>
-
-#include <tbb/parallel_for.h>
 
 #include "engine/body_extent.hpp"
 #include "engine/material.hpp"
@@ -17,8 +14,9 @@ namespace mpm {
 
 using std::numbers::pi;
 
-/// Values per loop of log_for: the logs of a batch in a loop of their own run in vector lanes in the AVX2 code.
-constexpr std::size_t log_lanes = 64;
+template <int Dim>
+void Problem<Dim>::form_body_constants(std::array<const double*, Dim>, std::size_t,
+                                       std::array<double*, 2 * Dim>) const {}
 
 template <int Dim>
 BodyForce<Dim> Problem<Dim>::body_force(double, BodyConstants<Dim>) const {
@@ -96,35 +94,17 @@ class VibratingPlate final : public Problem<2> {
   }
   bool has_body_force() const override { return true; }
   bool body_force_has_constants() const override { return true; }
-  BodyForce<2> body_force(double t, BodyConstants<2> constants) const override {
-    PlateBodyForce f{constants.key, {}};
-    if (!constants.axes) return f;
-    const double wt = c_ * pi * t / L_, k = 2 * pi / L_;
-    const double u_amp[2] = {A_ * std::sin(wt), A_ * std::sin(wt + pi)};
-    const double common = 4 * k_.mu / mat_.density - c_ * c_, scale = pi * pi / (L_ * L_);
-    for (int d = 0; d < 2; ++d) {
-      const std::vector<double>& X = (*constants.axes)[d];
-      auto terms = std::make_shared<std::vector<PlateBodyForce::AxisTerms>>(X.size());
-      tbb::parallel_for(tbb::blocked_range<std::size_t>(0, X.size(), log_lanes), [&](const auto& r) {
-        for (std::size_t begin = r.begin(); begin < r.end(); begin += log_lanes) {
-          const std::size_t n = std::min(log_lanes, r.end() - begin);
-          double s[log_lanes], F[log_lanes], lnF[log_lanes];
-          for (std::size_t j = 0; j < n; ++j) {
-            const auto [sin_kX, cos_kX] = trig_(X[begin + j]);
-            s[j] = scale * u_amp[d] * sin_kX;
-            F[j] = 1 + k * u_amp[d] * cos_kX;
-          }
-          with_active_isa([&](auto isa) {
-            for (std::size_t j = 0; j < n; ++j) lnF[j] = log_for<isa>(F[j]);
-          });
-          for (std::size_t j = 0; j < n; ++j)
-            (*terms)[begin + j] = {s[j] * common, s[j] * 4 / (mat_.density * F[j] * F[j]),
-                                   k_.lambda * (lnF[j] - 1) - k_.mu, k_.lambda * lnF[j]};
-        }
-      });
-      f.terms[d] = std::move(terms);
-    }
-    return f;
+  void form_body_constants(std::array<const double*, 2> X, std::size_t n,
+                           std::array<double*, 4> out) const override {
+    for (int d = 0; d < 2; ++d)
+      for (std::size_t p = 0; p < n; ++p) {
+        const double kX = 2 * pi / L_ * X[d][p];
+        out[2 * d][p] = std::sin(kX);
+        out[2 * d + 1][p] = std::cos(kX);
+      }
+  }
+  BodyForce<2> body_force(double t, BodyConstants<2> trig) const override {
+    return PlateBodyForce::at_time(trig, A_, L_, c_, k_.lambda, k_.mu, mat_.density, t);
   }
   bool has_exact() const override { return true; }
   ExactState<2> exact(const std::array<double, 2>& X, double t) const override {
@@ -136,11 +116,13 @@ class VibratingPlate final : public Problem<2> {
                    ExactState<2>* out) const override {
     const double wt = c_ * pi * t / L_;
     const double sin_t[2] = {std::sin(wt), std::sin(wt + pi)}, cos_t[2] = {std::cos(wt), std::cos(wt + pi)};
-    // the logs in a loop of their own (log_lanes), as in body_force; the rest stays in the build's own code, so
-    // that the initial velocities (exact at t = 0) do not depend on the instruction set
-    for (std::size_t begin = 0; begin < count; begin += log_lanes) {
-      const std::size_t n = std::min(log_lanes, count - begin);
-      double F[2][log_lanes], J[log_lanes], lnJ[log_lanes];  // the diagonal of F, its determinant and log
+    // the logs in a loop of their own, which runs in vector lanes in the AVX2 code (log_for), as PlateBodyForce does;
+    // the rest stays in the build's own code, so that the initial velocities (exact at t = 0) do not depend on the
+    // instruction set
+    constexpr std::size_t lanes = 64;
+    for (std::size_t begin = 0; begin < count; begin += lanes) {
+      const std::size_t n = std::min(lanes, count - begin);
+      double F[2][lanes], J[lanes], lnJ[lanes];  // the diagonal of F, its determinant and log
       for (std::size_t j = 0; j < n; ++j) {
         for (int d = 0; d < 2; ++d) {
           const auto [s, c] = trig_(X[d][first + begin + j]);
@@ -163,7 +145,7 @@ class VibratingPlate final : public Problem<2> {
   MaterialSpec mat_;
   Lame k_;
   double L_, A_, c_;
-  PeriodicSine trig_;  ///< sin and cos of 2π X/L for the exact solution and the body force
+  PeriodicSine trig_;  ///< sin and cos of 2π X/L for the exact solution
 };
 
 /// Column compaction (thesis §5.4.2, PROBLEMS.md): [0, H] fixed at the bottom, body force ramped to b_f over t_f;

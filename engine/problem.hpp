@@ -12,10 +12,9 @@
 #include <vector>
 
 #include "engine/periodic_sine.hpp"
-#include "engine/reference_axes.hpp"
 #include "engine/scene.hpp"
 #include "kernels/transfer.hpp"
-#include "kernels/isa.hpp"
+#include "kernels/vector_log.hpp"
 
 namespace mpm {
 
@@ -32,54 +31,57 @@ struct UniformBodyForce {
   }
 };
 
-/// A body force's per-particle constants: the packed ranks of each particle's reference coordinates
-/// (Field::body_constants, null where not stored) and the distinct coordinates they rank (ReferenceAxes).
+/// The columns of a body force's per-particle constants (Field::body_constants), null where not stored.
 template <int Dim>
-struct BodyConstants {
-  const double* key = nullptr;
-  const ReferenceAxes<Dim>* axes = nullptr;
-};
+using BodyConstants = std::array<const double*, 2 * Dim>;
 
-/// The manufactured body force of the vibrating plate (paper eq. 42 with π², PROBLEMS.md) at one time. It is
-/// separable in the reference position: with F_dd = 1 + k u_d cos k X_d, ln J = ln F_11 + ln F_22 and
-/// s_d = (π²/L²) u_d sin k X_d (u_d the displacement amplitudes at this time, k = 2π/L),
-///   b_d = s_d (4μ/ρ₀ − c²) − s_d 4/(ρ₀ F_dd²) (λ (ln F_dd − 1) − μ + λ ln F_ee),   e the other axis,
-/// so VibratingPlate::body_force forms the terms of each distinct reference coordinate once per step
-/// (ReferenceAxes: 2 × 1024 at 512² cells) and a particle reads two of them through its ranks and combines them in
-/// two multiply-adds: no log, no division, no trigonometry per particle. (Per particle, with sin k X_d and cos k X_d
-/// in four columns, the plate's scatter took 76 instructions more per particle-step than the block's, and its step
-/// ran at 0.82× the block's throughput: docs/PERFORMANCE.md.)
+/// The manufactured body force of the vibrating plate (paper eq. 42 with π², PROBLEMS.md) at one time. What depends
+/// on time alone is formed once per step (at_time), and what depends on the fixed reference position alone, sin k X_d
+/// and cos k X_d, once per run (VibratingPlate::form_body_constants, kept with the particles), so a particle costs a
+/// log and a few products: with libm's sin and cos per particle and step the large plate ran at 0.6× the throughput
+/// of a scene without body force, and with a table of them (PeriodicSine) the plate's scatter still took twice the
+/// time of the block's (docs/PERFORMANCE.md). The scatter asks for a batch of particles (at_batch): the column reads come
+/// first, then the arithmetic and the log (log_for, vector_log in AVX2 code) run in vector lanes.
 struct PlateBodyForce {
   static constexpr bool active = true;
-  /// The terms of one reference coordinate X_d: b_d = P − Q (R + Λ_e).
-  struct AxisTerms {
-    double P;       ///< s_d (4μ/ρ₀ − c²)
-    double Q;       ///< s_d 4/(ρ₀ F_dd²)
-    double R;       ///< λ (ln F_dd − 1) − μ
-    double Lambda;  ///< λ ln F_dd, the other axis' share of λ ln J
-  };
-  const double* key;  ///< per particle, its packed ranks (axis_ranks)
-  std::array<std::shared_ptr<const std::vector<AxisTerms>>, 2> terms;  ///< per axis, by rank
+  /// columns sin k X_0, cos k X_0, sin k X_1, cos k X_1 (k = 2π/L)
+  BodyConstants<2> trig;
+  std::array<double, 2> u_amp;  ///< A sin(ωt), A sin(ωt + π): u_d = u_amp_d sin(k X_d)
+  std::array<double, 2> F_amp;  ///< k u_amp: F_dd = 1 + F_amp_d cos(k X_d)
+  double lambda, mu, rho0, common, scale;  ///< common = 4μ/ρ₀ − c², scale = π²/L²
+
+  static PlateBodyForce at_time(BodyConstants<2> trig, double A, double L, double c, double lambda, double mu,
+                                double rho0, double t) {
+    const double pi = std::numbers::pi, wt = c * pi * t / L, k = 2 * pi / L;
+    const std::array<double, 2> u_amp{A * std::sin(wt), A * std::sin(wt + pi)};
+    return {trig, u_amp, {k * u_amp[0], k * u_amp[1]}, lambda, mu, rho0, 4 * mu / rho0 - c * c, pi * pi / (L * L)};
+  }
 
   template <int D>
   std::array<double, D> at(std::size_t p) const {
     if constexpr (D != 2) return {};
-    else {
-      const auto r = axis_ranks<2>(key[p]);
-      return combine((*terms[0])[r[0]], (*terms[1])[r[1]]);
+    else return force(trig[0][p], trig[1][p], trig[2][p], trig[3][p]);
+  }
+
+  /// out[j] = at(index[j]) for j < count ≤ body_force_batch, by the same arithmetic, in code compiled for I.
+  template <int D, Isa I = Isa::baseline>
+  void at_batch(const unsigned* index, std::size_t count, std::array<double, D>* out) const {
+    if constexpr (D == 2) {
+      double c[4][body_force_batch];  // the column reads (gathers)
+      for (std::size_t j = 0; j < count; ++j)
+        for (int k = 0; k < 4; ++k) c[k][j] = trig[k][index[j]];
+      for (std::size_t j = 0; j < count; ++j)  // unit-stride arithmetic: vectorised
+        out[j] = force<I>(c[0][j], c[1][j], c[2][j], c[3][j]);
     }
   }
 
-  /// out[j] = at(index[j]) for j < count ≤ body_force_batch, by the same arithmetic.
-  template <int D, Isa = Isa::baseline>
-  void at_batch(const unsigned* index, std::size_t count, std::array<double, D>* out) const {
-    if constexpr (D == 2)
-      for (std::size_t j = 0; j < count; ++j) out[j] = at<2>(index[j]);
-  }
-
  private:
-  static std::array<double, 2> combine(const AxisTerms& x, const AxisTerms& y) {
-    return {x.P - x.Q * (x.R + y.Lambda), y.P - y.Q * (y.R + x.Lambda)};
+  template <Isa I = Isa::baseline>
+  std::array<double, 2> force(double sin_x, double cos_x, double sin_y, double cos_y) const {
+    const double F11 = 1 + F_amp[0] * cos_x, F22 = 1 + F_amp[1] * cos_y;
+    const double kk = lambda * (log_for<I>(F11 * F22) - 1) - mu;
+    return {scale * u_amp[0] * sin_x * (common - 4 * kk / (rho0 * F11 * F11)),
+            scale * u_amp[1] * sin_y * (common - 4 * kk / (rho0 * F22 * F22))};
   }
 };
 
@@ -119,6 +121,9 @@ class Problem {
   /// Whether the body force takes constants from the reference position (then X and the constants are stored per
   /// particle, Field::body_constants).
   virtual bool body_force_has_constants() const { return false; }
+  /// Forms the body force's constants of n particles from their reference positions X (2 Dim columns of n).
+  virtual void form_body_constants(std::array<const double*, Dim> X, std::size_t n,
+                                   std::array<double*, 2 * Dim> out) const;
   /// The body force at time t; `constants` its columns (null if not stored).
   virtual BodyForce<Dim> body_force(double t, BodyConstants<Dim> constants) const;
   /// Whether the problem loads the grid with point forces (then point_loads is called at every force scatter).

@@ -293,7 +293,7 @@ SimulationState Simulation<Dim>::save_state() const {
 
 template <int Dim>
 void Simulation<Dim>::load_state(const SimulationState& st) {
-  load_particle_columns(store_, st);
+  load_particle_columns(store_, st, *problem_);
   step_ = st.step;
   time_ = st.time;
   conservation_ = st.conservation;

@@ -1,7 +1,6 @@
 // The table-and-series sine of manufactured solutions (engine/periodic_sine.hpp); the plate's body force it feeds,
-// checked against the exact solution it was manufactured from; the reference axes through which the particles read
-// it; and the batched sums that evaluate the force and the exact solution (the energy guard's power, the errors)
-// against plain sums particle by particle.
+// checked against the exact solution it was manufactured from; and the batched sums that evaluate the force and the
+// exact solution (the energy guard's power, the errors) against plain sums particle by particle.
 #include <catch2/catch.hpp>
 
 #include <algorithm>
@@ -18,14 +17,15 @@ using namespace mpm;
 
 namespace {
 
-/// The plate's body constants (rank_reference_axes) at the reference positions X0, X1.
+/// The plate's body constants (Problem::form_body_constants) at the reference positions X0, X1.
 struct PlateConstants {
-  std::vector<double> key;
-  ReferenceAxes<2> axes;
-  PlateConstants(const std::vector<double>& X0, const std::vector<double>& X1) : key(X0.size()) {
-    rank_reference_axes<2>({X0.data(), X1.data()}, X0.size(), key.data(), axes);
+  std::array<std::vector<double>, 4> columns;
+  PlateConstants(const Problem<2>& problem, const std::vector<double>& X0, const std::vector<double>& X1) {
+    for (auto& c : columns) c.resize(X0.size());
+    problem.form_body_constants({X0.data(), X1.data()}, X0.size(),
+                                {columns[0].data(), columns[1].data(), columns[2].data(), columns[3].data()});
   }
-  BodyConstants<2> view() const { return {key.data(), &axes}; }
+  BodyConstants<2> view() const { return {columns[0].data(), columns[1].data(), columns[2].data(), columns[3].data()}; }
 };
 
 }  // namespace
@@ -76,7 +76,7 @@ TEST_CASE("the plate's body force balances its exact solution", "[body-force]") 
     X0[p] = u(rng);
     X1[p] = u(rng);
   }
-  const PlateConstants constants(X0, X1);
+  const PlateConstants constants(*problem, X0, X1);
   for (const double t : {0.003, 0.0125}) {
     const BodyForce<2> force = problem->body_force(t, constants.view());
     const auto& plate = std::get<PlateBodyForce>(force);
@@ -114,7 +114,7 @@ TEST_CASE("the plate's body force for a batch of particles equals it particle by
     order[p] = static_cast<unsigned>(p);
   }
   std::shuffle(order.begin(), order.end(), rng);
-  const PlateConstants constants(X0, X1);
+  const PlateConstants constants(*problem, X0, X1);
   const BodyForce<2> force = problem->body_force(0.007, constants.view());
   const auto& plate = std::get<PlateBodyForce>(force);
   for (const std::size_t count : {std::size_t{1}, std::size_t{7}, body_force_batch}) {
@@ -188,51 +188,24 @@ TEST_CASE("a plate run's errors equal their sums particle by particle", "[body-f
   }
 }
 
-TEST_CASE("the reference axes hold each axis' distinct coordinates, and the keys each particle's ranks among them",
-          "[body-force]") {
-  // coordinates drawn from a few values, so that most repeat, and one of them at an axis' largest rank
-  std::mt19937_64 rng(11);
-  std::uniform_int_distribution<int> pick(0, 40);
-  std::vector<double> X0(3000), X1(3000);
-  for (std::size_t p = 0; p < X0.size(); ++p) {
-    X0[p] = 0.1 * pick(rng) - 1;
-    X1[p] = std::ldexp(pick(rng), -7);
-  }
-  std::vector<double> key(X0.size());
-  ReferenceAxes<2> axes;
-  rank_reference_axes<2>({X0.data(), X1.data()}, X0.size(), key.data(), axes);
-  for (int d = 0; d < 2; ++d) {
-    const std::vector<double>& X = d == 0 ? X0 : X1;
-    std::vector<double> distinct(X);
-    std::sort(distinct.begin(), distinct.end());
-    distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
-    CHECK(axes[d] == distinct);
-  }
-  std::size_t wrong = 0;
-  for (std::size_t p = 0; p < X0.size(); ++p) {
-    const auto r = axis_ranks<2>(key[p]);
-    wrong += axes[0][r[0]] != X0[p] || axes[1][r[1]] != X1[p];
-  }
-  CHECK(wrong == 0);
-}
-
 TEST_CASE("the plate's body constants follow their particles through a reordering and a loaded state",
           "[body-force]") {
-  // the constants are a column of the store (Field::body_constants), permuted with the rest, and formed afresh from
-  // X when a state is loaded: a state (outputs, checkpoints) does not hold them
+  // the constants are columns of the store (Field::body_constants), permuted with the rest, and formed afresh from X
+  // when a state is loaded: a state (outputs, checkpoints) does not hold them
   const Scene scene = parse_scene(test::plate_scene(8, 0.05));
+  const double k = 2 * std::numbers::pi / scene.grid.length[0];
   const auto wrong_constants = [&](const ParticleStore<2>& s) {
     const BodyConstants<2> c = body_constants_of(s);
     std::size_t wrong = 0;
-    for (std::size_t p = 0; p < s.size(); ++p) {
-      const auto r = axis_ranks<2>(c.key[p]);
-      for (int d = 0; d < 2; ++d) wrong += (*c.axes)[d][r[d]] != s.column(Field::reference, d)[p];
-    }
+    for (std::size_t p = 0; p < s.size(); ++p)
+      for (int d = 0; d < 2; ++d) {
+        const double kX = k * s.column(Field::reference, d)[p];
+        wrong += c[2 * d][p] != std::sin(kX) || c[2 * d + 1][p] != std::cos(kX);
+      }
     return wrong;
   };
   Simulation<2> sim(scene);
   sim.step();  // the first step permutes the particles into block order
-  CHECK(sim.particles().reference_axes()[0].size() == 24);  // 8 cells, 3 particles per cell and axis
   CHECK(wrong_constants(sim.particles()) == 0);
   const auto names = sim.particles().column_names();
   CHECK(std::find(names.begin(), names.end(), "body0") == names.end());
