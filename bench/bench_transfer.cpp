@@ -23,6 +23,9 @@
 // The gather's schedule (schedule/g2p_usl/<partitioner>/grain:G): the USL gather under each oneTBB partitioner —
 // auto (the engine's, engine/parallel_over.hpp), static, simple, affinity — and grain sizes from 256 to 16384
 // particles per task, so the engine's choice is a measurement (docs/PERFORMANCE.md, "The gather's schedule").
+//
+// Every kernel runs in the instruction set the engine picks at run time (with_active_isa, kernels/isa.hpp; MPM_ISA
+// forces one), the baselines too, so that the portable build times the code the engine runs.
 #include <atomic>
 #include <memory>
 #include <string>
@@ -39,6 +42,7 @@
 #include "engine/gauss_points.hpp"
 #include "engine/material.hpp"
 #include "engine/scene.hpp"
+#include "kernels/isa.hpp"
 #include "kernels/transfer.hpp"
 
 namespace {
@@ -47,6 +51,7 @@ using mpm_bench::Grid2D;
 using mpm_bench::ParticleSet2D;
 
 constexpr mpm::ScatterFields kAll{true, true, true};
+constexpr mpm::NoBodyForce kNoBody{};
 constexpr std::size_t kParticleGrain = 2048;  // as the engine's gathers
 constexpr std::size_t kGridGrain = 4096;      // as the engine's grid loops
 
@@ -127,7 +132,7 @@ void p2g_serial(ParticleSet2D& ps, Grid2D& g) {
   const auto gv = g.view();
   const unsigned* order = ps.bins.order().data();
   ps.bins.for_each_block_serial([&](std::size_t b, std::size_t e) {
-    mpm::scatter_p2g<kAll, 2, 3>(ps.basis, pv, gv, order, b, e, mpm::NoBodyForce{});
+    mpm::with_active_isa([&](auto isa) { mpm::scatter_p2g<kAll, 2, 3, isa>(ps.basis, pv, gv, order, b, e, kNoBody); });
   });
 }
 
@@ -137,7 +142,7 @@ void p2g_coloured(ParticleSet2D& ps, Grid2D& g) {
   const auto gv = g.view();
   const unsigned* order = ps.bins.order().data();
   ps.bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
-    mpm::scatter_p2g<kAll, 2, 3>(ps.basis, pv, gv, order, b, e, mpm::NoBodyForce{});
+    mpm::with_active_isa([&](auto isa) { mpm::scatter_p2g<kAll, 2, 3, isa>(ps.basis, pv, gv, order, b, e, kNoBody); });
   });
 }
 
@@ -147,7 +152,7 @@ void p2g_atomic(ParticleSet2D& ps, Grid2D& g) {
   const auto gv = g.view();
   const unsigned* order = ps.bins.order().data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ps.n, kParticleGrain), [&](const auto& r) {
-    scatter_p2g_atomic<kAll, 2, 3>(ps.basis, pv, gv, order, r.begin(), r.end());
+    mpm::with_active_isa([&](auto) { scatter_p2g_atomic<kAll, 2, 3>(ps.basis, pv, gv, order, r.begin(), r.end()); });
   });
 }
 
@@ -156,7 +161,8 @@ void p2g_per_thread(ParticleSet2D& ps, Grid2D& g, tbb::enumerable_thread_specifi
   const unsigned* order = ps.bins.order().data();
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ps.n, kParticleGrain), [&](const auto& r) {
     const auto lv = locals.local().view(g.stride1);
-    mpm::scatter_p2g<kAll, 2, 3>(ps.basis, pv, lv, order, r.begin(), r.end(), mpm::NoBodyForce{});
+    mpm::with_active_isa(
+        [&](auto isa) { mpm::scatter_p2g<kAll, 2, 3, isa>(ps.basis, pv, lv, order, r.begin(), r.end(), kNoBody); });
   });
   std::vector<LocalGrid*> copies;
   for (auto& l : locals) copies.push_back(&l);
@@ -261,9 +267,11 @@ template <mpm::GatherFields Fields>
 void gather(ParticleSet2D& ps, Grid2D& g, double dt, const mpm::NeoHookean& law, mpm::ParticleGuard& guard) {
   const auto pv = ps.store.view();
   const auto gv = g.view();
-  const auto stress = [&](const double* F, double* s) { law.stress<2>(F, s); };
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ps.n, kParticleGrain), [&](const auto& r) {
-    mpm::gather_g2p<Fields, 2, 3>(ps.basis, pv, gv, r.begin(), r.end(), dt, stress, guard);
+    mpm::with_active_isa([&](auto isa) {
+      const auto stress = [&](const double* F, double* s) { law.stress<2, isa>(F, s); };
+      mpm::gather_g2p<Fields, 2, 3, isa>(ps.basis, pv, gv, r.begin(), r.end(), dt, stress, guard);
+    });
   });
 }
 
@@ -275,10 +283,13 @@ void gather_usl_scheduled(ParticleSet2D& ps, Grid2D& g, double dt, const mpm::Ne
                           tbb::affinity_partitioner& affinity) {
   const auto pv = ps.store.view();
   const auto gv = g.view();
-  const auto stress = [&](const double* F, double* s) { law.stress<2>(F, s); };
   const tbb::blocked_range<std::size_t> range(0, ps.n, grain);
   const auto body = [&](const tbb::blocked_range<std::size_t>& r) {
-    mpm::gather_g2p<mpm::GatherFields{true, true, true}, 2, 3>(ps.basis, pv, gv, r.begin(), r.end(), dt, stress, guard);
+    mpm::with_active_isa([&](auto isa) {
+      const auto stress = [&](const double* F, double* s) { law.stress<2, isa>(F, s); };
+      mpm::gather_g2p<mpm::GatherFields{true, true, true}, 2, 3, isa>(ps.basis, pv, gv, r.begin(), r.end(), dt, stress,
+                                                                       guard);
+    });
   };
   switch (part) {
     case Partitioner::auto_: tbb::parallel_for(range, body, tbb::auto_partitioner{}); break;
@@ -333,7 +344,10 @@ void BM_G2P(benchmark::State& state, G2P variant) {
         const auto gv = g.view();
         const unsigned* order = ps.bins.order().data();
         ps.bins.for_each_block_coloured([&](std::size_t b, std::size_t e) {
-          benchmark::DoNotOptimize(mpm::advance_velocity_scatter_momentum<2, 3>(ps.basis, pv, gv, order, b, e, dt));
+          mpm::with_active_isa([&](auto isa) {
+            benchmark::DoNotOptimize(
+                mpm::advance_velocity_scatter_momentum<2, 3, isa>(ps.basis, pv, gv, order, b, e, dt));
+          });
         });
         break;
       }
@@ -363,12 +377,14 @@ void BM_Stress(benchmark::State& state) {
   const auto pv = ps.store.view();
   auto run = [&] {
     tbb::parallel_for(tbb::blocked_range<std::size_t>(0, ps.n, kParticleGrain), [&](const auto& r) {
-      for (std::size_t p = r.begin(); p < r.end(); ++p) {
-        const double F[4] = {pv.F[0][p], pv.F[1][p], pv.F[2][p], pv.F[3][p]};
-        double s[3];
-        law.stress<2>(F, s);
-        for (int c = 0; c < 3; ++c) pv.s[c][p] = s[c];
-      }
+      mpm::with_active_isa([&](auto isa) {
+        for (std::size_t p = r.begin(); p < r.end(); ++p) {
+          const double F[4] = {pv.F[0][p], pv.F[1][p], pv.F[2][p], pv.F[3][p]};
+          double s[3];
+          law.stress<2, isa>(F, s);
+          for (int c = 0; c < 3; ++c) pv.s[c][p] = s[c];
+        }
+      });
     });
   };
   time_per_particle(state, run, ps.n);
