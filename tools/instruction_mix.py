@@ -6,6 +6,8 @@ then give the binary, the profile, a substring of the kernel's function name (th
 wrappers hold the inlined kernels) and the number of particle-steps the run made. Example (docs/PERFORMANCE.md):
 
   python3 tools/instruction_mix.py build/tools/mpm cg.out 'gather<mpm::GatherFields{true, true, true}>' 320000
+
+--stack adds the moves to and from the stack frame (register spills, locals), counted within the kinds above.
 """
 import argparse
 import collections
@@ -63,12 +65,21 @@ def kind(mnemonic):
     return "integer: addresses, indices, loop control"
 
 
+def stack_traffic(mnemonic, operands):
+    """'stack store' or 'stack load' for a move to or from the frame (%rsp or %rbp based: spills, locals), else None."""
+    if not re.match(r"v?mov", mnemonic) or "(%rsp)" not in operands and "(%rbp)" not in operands:
+        return None
+    return "stack store" if re.search(r"\(%r[sb]p\)$", operands) else "stack load"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("binary")
     ap.add_argument("profile")
     ap.add_argument("function", help="substring of the kernel's function name")
     ap.add_argument("particle_steps", type=float)
+    ap.add_argument("--stack", action="store_true",
+                    help="also count the moves to and from the stack frame (register spills and locals)")
     args = ap.parse_args()
     counts = counts_by_address(args.profile, args.function)
     if not counts:
@@ -76,18 +87,24 @@ def main():
     listing = subprocess.run(["objdump", "-d", "--no-show-raw-insn", f"--start-address={min(counts):#x}",
                               f"--stop-address={max(counts) + 16:#x}", args.binary],
                              check=True, capture_output=True, text=True).stdout
-    by_kind = collections.Counter()
+    by_kind, by_stack = collections.Counter(), collections.Counter()
     for line in listing.splitlines():
         address, sep, instruction = line.strip().partition(":")
         if not sep or not instruction.split():
             continue
         try:
-            by_kind[kind(instruction.split()[0])] += counts.get(int(address, 16), 0) / args.particle_steps
+            executed = counts.get(int(address, 16), 0) / args.particle_steps
         except ValueError:
             continue
+        mnemonic, _, operands = instruction.strip().partition(" ")
+        by_kind[kind(mnemonic)] += executed
+        if args.stack and (traffic := stack_traffic(mnemonic, operands.strip())):
+            by_stack[traffic] += executed
     print(f"{args.function}: {sum(by_kind.values()):.0f} instructions per particle-step")
     for name, value in by_kind.most_common():
         print(f"  {name:45s}{value:7.1f}")
+    for name, value in sorted(by_stack.items()):
+        print(f"  of all kinds, {name}s{'':{30 - len(name)}s}{value:7.1f}")
 
 
 if __name__ == "__main__":
