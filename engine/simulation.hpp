@@ -88,7 +88,7 @@ class Simulation {
   double external_power() const;
   /// USL and MUSL: whether a step's last gather pass may also scatter the next step's P2G when the next step keeps
   /// the bins (Step::gather_and_scatter_ahead). The results are the same to the bit either way. Off by default: at
-  /// 1e6 particles it ran at 0.95–1.02× the separate passes, at 1e7 at 0.92–1.16× (docs/PERFORMANCE.md).
+  /// 1e6 particles it ran at 0.88–1.05× the separate passes, at 1e7 at 0.81–1.16× (docs/PERFORMANCE.md).
   void allow_scatter_ahead(bool allow) { scatter_ahead_allowed_ = allow; }
   /// How many steps found their P2G done by the previous step's gather pass.
   long steps_scattered_ahead() const { return steps_scattered_ahead_; }

@@ -104,7 +104,7 @@ def main():
     for name, value in by_kind.most_common():
         print(f"  {name:45s}{value:7.1f}")
     for name, value in sorted(by_stack.items()):
-        print(f"  of all kinds, {name}s{'':{30 - len(name)}s}{value:7.1f}")
+        print(f"  {'of all kinds, ' + name + 's':45s}{value:7.1f}")
 
 
 if __name__ == "__main__":
