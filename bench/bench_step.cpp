@@ -9,10 +9,7 @@
 //                                              step's P2G in one pass over the particles,
 //                                              Simulation::allow_scatter_ahead),
 //                                              musl-9ppc, musl-tls-9ppc (2D, 3x3 particles per cell, the plate's
-//                                              layout: TLS fits most cells from their own particles there),
-//                                              usl-parallel, musl-parallel, musl-tls-parallel (1e3 ... 1.6e4:
-//                                              every step on the threads given, where the schemes without the
-//                                              suffix step a small problem on one thread, SmallSteps)
+//                                              layout: TLS fits most cells from their own particles there)
 //
 // Counter particle_steps_per_s = particles x steps / wall time. Set-up (scene parsing, seeding, the first-touch
 // of every array) is outside the timed loop. A Simulation is reused by consecutive benchmarks with the same
@@ -96,7 +93,6 @@ mpm::Simulation<Dim>& simulation(std::int64_t n, const std::string& scheme, long
     cache.sim.reset();  // free the previous one first: 1e7 particles are ~1.3 GB
     cache.sim = std::make_unique<mpm::Simulation<Dim>>(mpm::parse_scene(scene_json(Dim, n, scheme)));
     cache.sim->allow_scatter_ahead(scheme.ends_with("-ahead"));
-    if (scheme.ends_with("-parallel")) cache.sim->set_serial_below(0);
     cache.key = key;
   }
   return *cache.sim;
@@ -143,13 +139,10 @@ const bool registered = [] {
   // 1D stops at 4e6 particles: the scene contract allows at most 2^20 cells per axis (4 particles per cell)
   const std::vector<std::int64_t> sizes_1d{1'000, 10'000, 100'000, 1'000'000, 4'000'000};
   const std::vector<std::int64_t> sizes_2d{1'000, 10'000, 100'000, 1'000'000, 10'000'000};
-  // around the size below which usl and musl step on one thread (SmallSteps)
-  const std::vector<std::int64_t> sizes_small{1'000, 2'000, 4'000, 8'000, 16'000};
   for (int dim : {1, 2})
-    for (const std::string scheme : {"usl", "musl", "musl-tls", "usl-generic", "musl-9ppc", "musl-tls-9ppc",
-                                     "usl-ahead", "musl-ahead", "usl-parallel", "musl-parallel",
-                                     "musl-tls-parallel"})
-      for (std::int64_t n : scheme.ends_with("-parallel") ? sizes_small : dim == 1 ? sizes_1d : sizes_2d) {
+    for (const std::string scheme :
+         {"usl", "musl", "musl-tls", "usl-generic", "musl-9ppc", "musl-tls-9ppc", "usl-ahead", "musl-ahead"})
+      for (std::int64_t n : dim == 1 ? sizes_1d : sizes_2d) {
         if (scheme.starts_with("musl-tls") && n > 1'000'000) continue;  // several direct steps per step
         // the whole-step cost of the generic weights beside the fast path's, and the 9-per-cell pair
         // (2D, 1e5 and 1e6)

@@ -477,10 +477,6 @@ class MeshSimulation::Step {
 };
 
 void MeshSimulation::step() {
-  small_steps_.run(store_.size(), grid_.m.size(), [this] { advance(); });
-}
-
-void MeshSimulation::advance() {
   const double dt = step_ + 1 == steps_total_ ? scene_.time.end - dt_ * step_ : dt_;
   locate_particles();
   cg_iterations_ = 0;

@@ -17,7 +17,6 @@
 #include "engine/powell_sabin.hpp"
 #include "engine/problem.hpp"
 #include "engine/scene.hpp"
-#include "engine/small_steps.hpp"
 #include "engine/triangle_mesh.hpp"
 #include "engine/triangle_p1.hpp"
 #include "kernels/reconstruction.hpp"
@@ -39,13 +38,8 @@ class MeshSimulation {
   explicit MeshSimulation(const Scene& scene);
   ~MeshSimulation();
 
-  /// Advances one time step, on the calling thread alone for a small problem (SmallSteps). Throws UnstableRun if a
-  /// particle's state became invalid or it left the mesh.
+  /// Advances one time step. Throws UnstableRun if a particle's state became invalid or it left the mesh.
   void step();
-  /// Steps of fewer particles, on a mesh of fewer basis functions, run on the calling thread alone (0: never).
-  void set_serial_below(std::size_t size) { small_steps_.set_serial_below(size); }
-  /// Whether the steps run on the calling thread alone.
-  bool steps_serially() const { return small_steps_.serial(store_.size(), grid_.m.size()); }
 
   bool finished() const { return step_ >= steps_total_; }
   /// Every step locates the particles afresh: any step resumes bitwise like the uninterrupted run.
@@ -82,8 +76,6 @@ class MeshSimulation {
  private:
   template <class B, class M, class F>
   class Step;
-  /// step()'s work, on the threads of the current arena.
-  void advance();
   void locate_particles();
   void check_mass();
   void check_momentum();
@@ -102,7 +94,6 @@ class MeshSimulation {
   std::optional<MeshMassMatrix> mass_matrix_;            ///< projection and consistent mass only
   std::optional<ConsistentMassSolver<2>> mass_solver_;  ///< its CG
   int cg_iterations_ = 0;
-  SmallSteps small_steps_;
   double particle_mass_ = 0.0, empty_mass_ = 0.0;
   double dt_ = 0.0, time_ = 0.0;
   long step_ = 0, steps_total_ = 0;

@@ -336,7 +336,6 @@ class Run {
     j["dt"] = sim_.dt();
     j["particles"] = sim_.particles().size();
     j["threads"] = threads_;
-    j["step_threads"] = sim_.steps_serially() ? 1 : threads_;  // a small problem steps on one (SmallSteps)
     j["isa"] = isa_name(active_isa());
     j["wall_s"] = stepping_s_;
     j["particle_steps_per_s"] =

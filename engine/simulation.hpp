@@ -22,7 +22,6 @@
 #include "engine/particle_store.hpp"
 #include "engine/problem.hpp"
 #include "engine/scene.hpp"
-#include "engine/small_steps.hpp"
 #include "kernels/dual_domain.hpp"
 #include "kernels/max_ent.hpp"
 #include "kernels/stencil.hpp"
@@ -59,13 +58,8 @@ class Simulation {
   explicit Simulation(const Scene& scene);
   ~Simulation();
 
-  /// Advances one time step, on the calling thread alone for a small problem (SmallSteps). Throws UnstableRun if a
-  /// particle's state became invalid.
+  /// Advances one time step. Throws UnstableRun if a particle's state became invalid.
   void step();
-  /// Steps of fewer particles, on a grid of fewer DOFs, run on the calling thread alone (0: never).
-  void set_serial_below(std::size_t size) { small_steps_.set_serial_below(size); }
-  /// Whether the steps run on the calling thread alone.
-  bool steps_serially() const { return small_steps_.serial(store_.size(), grid_.dofs); }
 
   bool finished() const { return step_ >= steps_total_; }
   /// Whether the next step bins the particles afresh. Between binnings the blocks a particle scatters in depend on
@@ -116,8 +110,6 @@ class Simulation {
   /// the next to keep the bins, if its P2G may be scattered ahead (Step::gather_and_scatter_ahead); 0 if not.
   /// Instantiated per basis, so that the bases' kernels can compile in separate translation units
   /// (simulation_2d.cpp, simulation_2d_generic.cpp).
-  /// step()'s work, on the threads of the current arena.
-  void advance();
   template <class B>
   double step_with(const B& basis, const BodyForce<Dim>& body, double dt, double scatter_ahead_budget_cells);
   void clear_grid(bool mass, bool momentum, bool force);
@@ -154,7 +146,6 @@ class Simulation {
   bool grid_scattered_ahead_ = false;
   long steps_scattered_ahead_ = 0;
   int cg_iterations_ = 0;
-  SmallSteps small_steps_;
   std::optional<ConsistentMassSolver<Dim>> mass_solver_;  ///< projection and consistent mass only
   std::vector<MomentumTotals<Dim>> block_momentum_;
   std::optional<GaussPoints<Dim>> gauss_;      ///< reconstructed mappings only

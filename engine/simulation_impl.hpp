@@ -308,11 +308,6 @@ bool Simulation<Dim>::next_step_bins() const {
 
 template <int Dim>
 void Simulation<Dim>::step() {
-  small_steps_.run(store_.size(), grid_.dofs, [this] { advance(); });
-}
-
-template <int Dim>
-void Simulation<Dim>::advance() {
   const double dt = step_ + 1 == steps_total_ ? scene_.time.end - dt_ * step_ : dt_;
   // bin first: the periodic reordering moves the columns, so every pointer into them is taken after it
   const bool reorder = step_ % reorder_every == 0;

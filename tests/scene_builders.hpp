@@ -43,15 +43,11 @@ void run_to_end(Simulation<Dim>& sim) {
   while (!sim.finished()) sim.step();
 }
 
-/// Every particle column after `steps` steps on at most `threads` threads (for the thread-count tests); steps of
-/// fewer than `serial_below` particles on the calling thread alone (SmallSteps; by default none, so that the tests'
-/// small scenes run the parallel stages).
+/// Every particle column after `steps` steps on at most `threads` threads (for the thread-count tests).
 template <int Dim>
-std::vector<std::vector<double>> state_after(const nlohmann::json& scene, int steps, int threads,
-                                             std::size_t serial_below = 0) {
+std::vector<std::vector<double>> state_after(const nlohmann::json& scene, int steps, int threads) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   Simulation<Dim> sim(parse_scene(scene));
-  sim.set_serial_below(serial_below);
   for (int s = 0; s < steps && !sim.finished(); ++s) sim.step();
   std::vector<std::vector<double>> cols;
   for (const auto& name : sim.particles().column_names()) {

@@ -3,10 +3,9 @@
 // convergence, and the scenes the mesh refuses.
 #include <algorithm>
 #include <cmath>
-#include <limits>
+#include <tuple>
 #include <random>
 #include <string>
-#include <tuple>
 
 #include <catch2/catch.hpp>
 #include <tbb/global_control.h>
@@ -40,13 +39,9 @@ void run_to_end(MeshSimulation& sim) {
   while (!sim.finished()) sim.step();
 }
 
-/// Every particle column after `steps` steps on at most `threads` threads, the steps of fewer than `serial_below`
-/// particles on the calling thread alone (by default none: the parallel stages).
-std::vector<std::vector<double>> columns_after(const nlohmann::json& scene, int steps, int threads,
-                                               std::size_t serial_below = 0) {
+std::vector<std::vector<double>> columns_after(const nlohmann::json& scene, int steps, int threads) {
   tbb::global_control limit(tbb::global_control::max_allowed_parallelism, threads);
   MeshSimulation sim(parse_scene(scene));
-  sim.set_serial_below(serial_below);
   for (int s = 0; s < steps; ++s) sim.step();
   std::vector<std::vector<double>> cols;
   for (const auto& name : sim.particles().column_names()) {
@@ -171,8 +166,6 @@ TEST_CASE("runs on a triangle mesh - 1 thread bitwise equal to 2 threads", "[mes
     INFO(basis << " " << mapping << " " << mass);
     const auto scene = plate_on_mesh("plate_h1.msh", basis, mapping, "musl", 24, 1e-4, 2e-3, mass);
     CHECK(columns_after(scene, 20, 1) == columns_after(scene, 20, 2));
-    // every step on the calling thread alone (SmallSteps): the same bits as the parallel stages
-    CHECK(columns_after(scene, 20, 2, std::numeric_limits<std::size_t>::max()) == columns_after(scene, 20, 2));
   }
 }
 

@@ -8,7 +8,6 @@
 
 #include <catch2/catch.hpp>
 #include <tbb/global_control.h>
-#include <tbb/task_arena.h>
 
 #include "engine/deterministic_sum.hpp"
 #include "scene_builders.hpp"
@@ -82,39 +81,6 @@ TEST_CASE("1-thread and 2-thread runs are bitwise identical", "[simulation][para
   }
   const auto bar = bar_scene(40, "bspline2", "projection");
   CHECK(state_after<1>(bar, 19, 1) == state_after<1>(bar, 19, 2));
-}
-
-TEST_CASE("small problems step on one thread, with the bits of the parallel stages", "[simulation][parallel]") {
-  const std::size_t serially = SmallSteps::default_serial_below;
-  for (const char* mapping : {"direct", "tls"}) {
-    auto scene = plate_scene(16, 0.05, "usl");  // 16² cells, 3×3 particles per cell: 2304 particles
-    scene["algorithm"]["mapping"] = mapping;
-    INFO(mapping);
-    CHECK(Simulation<2>(parse_scene(scene)).steps_serially());
-    CHECK(state_after<2>(scene, 40, 2, serially) == state_after<2>(scene, 40, 2));
-  }
-  const auto bar = bar_scene(40, "bspline2", "lumped");
-  CHECK(Simulation<1>(parse_scene(bar)).steps_serially());
-  CHECK(state_after<1>(bar, 19, 2, serially) == state_after<1>(bar, 19, 2));
-  CHECK_FALSE(Simulation<2>(parse_scene(plate_scene(32))).steps_serially());  // 9216 particles
-}
-
-TEST_CASE("SmallSteps: a small step on the calling thread alone, exceptions passed on", "[simulation][parallel]") {
-  tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
-  SmallSteps steps;
-  const std::size_t below = SmallSteps::default_serial_below;
-  const auto concurrency_in = [&](std::size_t particles, std::size_t dofs) {
-    int seen = 0;
-    steps.run(particles, dofs, [&] { seen = tbb::this_task_arena::max_concurrency(); });
-    return seen;
-  };
-  CHECK(concurrency_in(below - 1, below - 1) == 1);
-  CHECK(concurrency_in(below, 1) == tbb::this_task_arena::max_concurrency());
-  CHECK(concurrency_in(1, below) == tbb::this_task_arena::max_concurrency());
-  steps.set_serial_below(0);
-  CHECK(concurrency_in(1, 1) == tbb::this_task_arena::max_concurrency());
-  steps.set_serial_below(below);
-  CHECK_THROWS_AS(steps.run(1, 1, [] { throw UnstableRun("in a serial step"); }), UnstableRun);
 }
 
 TEST_CASE("deterministic_sums: serial sums to round-off, the same bits on 1 and 2 threads", "[simulation][parallel]") {
